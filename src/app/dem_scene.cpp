@@ -1,0 +1,170 @@
+// SPDX-License-Identifier: MIT
+#include "app/dem_scene.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "app/signals.hpp"
+#include "core/errors.hpp"
+#include "tessera_version.hpp"
+
+namespace tessera {
+
+namespace fs = std::filesystem;
+
+DemScene::DemScene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir) : case_dir_(case_dir) {
+  const ConfigNode domain = root.section("domain");
+  const Vec3 lo = domain.vec3("box_min", Dim::length), hi = domain.vec3("box_max", Dim::length);
+  for (int d = 0; d < 3; ++d)
+    if (!(hi[d] > lo[d])) domain.fail("box_max", "larger than box_min in every direction");
+  std::array<int, 3> grid{0, 0, 0};
+  if (domain.has("process_grid")) {
+    const auto g = domain.integers("process_grid", 3, 0, 1 << 20);
+    grid = {static_cast<int>(g[0]), static_cast<int>(g[1]), static_cast<int>(g[2])};
+  }
+  decomp_ = std::make_unique<Decomposition>(comm, lo, hi, grid);
+
+  const ConfigNode solid = root.section("solid");
+  ContactModel model(solid);
+  Walls walls(solid, model);
+  dem_ = std::make_unique<DemSolver>(*decomp_, std::move(model), std::move(walls), DemSettings::from_config(solid));
+
+  const ConfigNode run = root.section("run");
+  if (run.has("end_time")) end_time_ = run.real("end_time", Dim::time, Range::positive());
+  if (run.has("max_steps")) max_steps_ = run.integer("max_steps", 1, 1L << 50);
+  check_interval_ = run.real("check_interval", Dim::time, Range::positive(), 1e-3);
+
+  if (const auto out = root.optional_section("output")) {
+    snapshot_interval_ = out->real("snapshot_interval", Dim::time, Range::non_negative(), 0.0);
+    checkpoint_interval_ = out->real("checkpoint_interval", Dim::time, Range::non_negative(), 0.0);
+    progress_interval_ = out->real("progress_interval", Dim::time, Range::positive(), 10.0);
+  }
+}
+
+std::string DemScene::resolve_path(const std::string& p) const {
+  const fs::path path(p);
+  return path.is_absolute() ? p : (fs::path(case_dir_) / path).lexically_normal().string();
+}
+
+nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolved_case) {
+  MPI_Comm comm = decomp_->comm();
+  const bool root = decomp_->rank() == 0;
+  const auto wall_start = std::chrono::steady_clock::now();
+  auto wall = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count(); };
+
+  if (opt.restart) {
+    restore(read_checkpoint(*opt.restart, *dem_));
+    dem_->setup(false);
+  } else {
+    create_bodies();
+    dem_->setup(true);
+  }
+  const long start_steps = dem_->steps();
+  DemStats stats = dem_->stats();
+  if (root && !opt.quiet) {
+    const auto& g = decomp_->dims();
+    std::printf("tessera %s: scene %s, %ld bodies, %d ranks (grid %dx%dx%d), law %s\n", kTesseraVersion, name(),
+                stats.bodies, decomp_->size(), g[0], g[1], g[2], dem_->model().law_name());
+    std::printf("  dt %.4g s (contact duration %.4g s), skin %.4g m\n", dem_->dt(), dem_->contact_duration(),
+                dem_->skin());
+    std::fflush(stdout);
+  }
+
+  SnapshotSeries snapshots(opt.output_dir + "/snapshots");
+  auto next_after = [&](double interval) {
+    return interval > 0 ? (std::floor(dem_->time() / interval + 1e-9) + 1) * interval : 1e300;
+  };
+  if (snapshot_interval_ > 0) snapshots.write(*dem_);
+  double next_snapshot = next_after(snapshot_interval_), next_checkpoint = next_after(checkpoint_interval_);
+  double next_check = next_after(check_interval_);
+  double last_progress = 0;
+  std::string status = "completed";
+  constexpr long poll_every = 100;  // steps between collective polls (signals, progress)
+
+  while (true) {
+    if (end_time_ && dem_->time() >= *end_time_ - 0.5 * dem_->dt()) break;
+    if (max_steps_ && dem_->steps() >= *max_steps_) break;
+    dem_->step();
+    if (dem_->time() >= next_check - 0.5 * dem_->dt()) {
+      next_check += check_interval_;
+      stats = dem_->stats();
+      if (finished(stats)) break;
+    }
+    if (dem_->time() >= next_snapshot - 0.5 * dem_->dt()) {
+      auto t = dem_->timers().scope("output");
+      snapshots.write(*dem_);
+      next_snapshot += snapshot_interval_;
+    }
+    if (dem_->time() >= next_checkpoint - 0.5 * dem_->dt()) {
+      auto t = dem_->timers().scope("output");
+      write_checkpoint(opt.output_dir + "/checkpoint.h5", *dem_, extras());
+      next_checkpoint += checkpoint_interval_;
+    }
+    if (dem_->steps() % poll_every == 0) {
+      int flags[2] = {stop_requested() ? 1 : 0, (root && wall() - last_progress >= progress_interval_) ? 1 : 0};
+      MPI_Allreduce(MPI_IN_PLACE, flags, 2, MPI_INT, MPI_MAX, comm);
+      if (flags[0]) {
+        status = "interrupted";
+        break;
+      }
+      if (flags[1]) {
+        last_progress = wall();
+        stats = dem_->stats();
+        if (root && !opt.quiet) {
+          const double rate = static_cast<double>(dem_->steps() - start_steps) / std::max(1e-9, wall());
+          std::printf("step %ld  t %.5g s  KE %.3g J  Z %.2f  max|v| %.3g m/s  %.3g steps/s  wall %.1f s",
+                      dem_->steps(), dem_->time(), stats.kinetic_translational + stats.kinetic_rotational,
+                      stats.bodies ? 2.0 * stats.contacts / stats.bodies : 0.0, stats.max_speed, rate, wall());
+          if (end_time_)
+            std::printf("  ETA %.0f s", (*end_time_ - dem_->time()) / dem_->dt() / std::max(rate, 1e-9));
+          std::printf("\n");
+          std::fflush(stdout);
+        }
+      }
+    }
+  }
+  {
+    auto t = dem_->timers().scope("output");
+    write_checkpoint(opt.output_dir + "/checkpoint.h5", *dem_, extras());
+    if (snapshot_interval_ > 0) snapshots.write(*dem_);
+  }
+  finish(opt);
+  stats = dem_->stats();
+
+  nlohmann::json q;
+  q["bodies"] = stats.bodies;
+  q["kinetic_energy"] = stats.kinetic_translational + stats.kinetic_rotational;
+  q["coordination_number"] = stats.bodies ? 2.0 * stats.contacts / stats.bodies : 0.0;
+  quantities(q);
+
+  nlohmann::json s;
+  s["code_version"] = kTesseraVersion;
+  s["scene"] = name();
+  s["status"] = status;
+  s["ranks"] = decomp_->size();
+  s["process_grid"] = decomp_->dims();
+  s["steps"] = dem_->steps();
+  s["steps_this_run"] = dem_->steps() - start_steps;
+  s["time"] = dem_->time();
+  s["dt"] = dem_->dt();
+  s["contact_law"] = dem_->model().law_name();
+  s["neighbor_list_builds"] = dem_->list_builds();
+  double wall_s = wall();
+  MPI_Bcast(&wall_s, 1, MPI_DOUBLE, 0, comm);
+  s["wall_seconds"] = wall_s;
+  s["body_steps_per_second_per_core"] =
+      static_cast<double>(stats.bodies) * static_cast<double>(dem_->steps() - start_steps) / wall_s / decomp_->size();
+  s["quantities"] = q;
+  nlohmann::json timers;
+  for (const auto& [phase, st] : dem_->timers().reduce(comm))
+    timers[phase] = {{"min", st.min}, {"avg", st.avg}, {"max", st.max}};
+  s["timers"] = timers;
+  s["case"] = resolved_case;
+  s["output"] = {{"checkpoint", "checkpoint.h5"}, {"snapshots", snapshots.count() ? "snapshots/particles.xmf" : ""}};
+  if (root) write_file_atomically(opt.output_dir + "/summary.json", s.dump(2) + "\n");
+  return s;
+}
+
+}  // namespace tessera

@@ -1,0 +1,64 @@
+// SPDX-License-Identifier: MIT
+// A dry scene: a DEM in a box, run in a loop that writes snapshots, checkpoints (also on SIGTERM or
+// SIGUSR1, a batch queue's warning), a progress line on rank 0 and DIR/summary.json.
+// Concrete scenes create their bodies, say when they are done and report their quantities.
+//
+// Case sections read here: domain, solid, run, output. All keys are read in the constructor, so
+// that bad input stops the run before any output is written.
+#pragma once
+#include <mpi.h>
+
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+#include "core/config.hpp"
+#include "core/decomposition.hpp"
+#include "solid/dem_io.hpp"
+#include "solid/dem_solver.hpp"
+
+namespace tessera {
+
+struct RunOptions {
+  std::string output_dir;
+  std::optional<std::string> restart;
+  bool quiet = false;
+};
+
+class DemScene {
+ public:
+  DemScene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir);
+  virtual ~DemScene() = default;
+  virtual const char* name() const = 0;
+
+  // Runs to the end; returns the summary (also written to DIR/summary.json).
+  nlohmann::json run(const RunOptions& options, const nlohmann::json& resolved_case);
+
+  DemSolver& dem() { return *dem_; }
+  int rank() const { return decomp_->rank(); }
+
+ protected:
+  virtual void create_bodies() = 0;
+  // Called every run.check_interval of simulated time (collective): true ends the run.
+  virtual bool finished(const DemStats& stats) { (void)stats; return false; }
+  virtual void finish(const RunOptions& options) { (void)options; }
+  virtual void quantities(nlohmann::json& q) { (void)q; }
+  virtual CheckpointExtras extras() const { return {}; }
+  virtual void restore(const CheckpointExtras& e) { (void)e; }
+
+  std::string resolve_path(const std::string& p) const;
+
+  std::unique_ptr<Decomposition> decomp_;
+  std::unique_ptr<DemSolver> dem_;
+  std::optional<double> end_time_;
+  std::optional<long> max_steps_;
+  double check_interval_ = 0;
+  double snapshot_interval_ = 0, checkpoint_interval_ = 0, progress_interval_ = 10;
+  std::string case_dir_;
+};
+
+// Builds the scene the case names (key `scene`).
+std::unique_ptr<DemScene> make_scene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir);
+
+}  // namespace tessera

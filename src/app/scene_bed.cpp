@@ -1,0 +1,41 @@
+// SPDX-License-Identifier: MIT
+// Bed: runs a bed read from a LAMMPS data file (atom_style sphere) for run.end_time or
+// run.max_steps: the scene the DEM benchmark times against LAMMPS and LIGGGHTS on the same file.
+#include <filesystem>
+
+#include "app/dem_scene.hpp"
+#include "app/scenes.hpp"
+#include "core/errors.hpp"
+
+namespace tessera {
+
+namespace {
+
+class BedScene final : public DemScene {
+ public:
+  BedScene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir) : DemScene(root, comm, case_dir) {
+    const ConfigNode b = root.section("bed");
+    file_ = resolve_path(b.text("file"));
+    if (!std::filesystem::is_regular_file(file_)) b.fail("file", "an existing LAMMPS data file (" + file_ + ")");
+    for (const auto& m : b.texts("type_materials"))
+      types_.push_back(dem_->model().material_index(m, b.key_path("type_materials")));
+    if (types_.empty()) b.fail("type_materials", "a list naming the material of each LAMMPS atom type");
+    if (!end_time_ && !max_steps_) root.section("run").fail("end_time", "run.end_time or run.max_steps");
+  }
+  const char* name() const override { return "bed"; }
+
+ protected:
+  void create_bodies() override { read_lammps_data(file_, *dem_, types_, "bed.file"); }
+
+ private:
+  std::string file_;
+  std::vector<int> types_;
+};
+
+}  // namespace
+
+std::unique_ptr<DemScene> make_bed_scene(const ConfigNode& root, MPI_Comm comm, const std::string& dir) {
+  return std::make_unique<BedScene>(root, comm, dir);
+}
+
+}  // namespace tessera

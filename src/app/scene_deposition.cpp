@@ -1,0 +1,140 @@
+// SPDX-License-Identifier: MIT
+// Deposition: grains start on a loose jittered lattice in a region of the box and settle under
+// gravity until the total kinetic energy falls below `deposition.settled_kinetic_energy`. The
+// settled bed is the run's checkpoint (DIR/checkpoint.h5, a start for later scenes) and a LAMMPS
+// data file (DIR/bed.data) for peers. Reports packing fraction and coordination number.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+
+#include "app/dem_scene.hpp"
+#include "app/scenes.hpp"
+#include "core/errors.hpp"
+
+namespace tessera {
+
+namespace {
+
+// Counter-based jitter: the same for a given (seed, id) on any rank count.
+double unit_random(std::uint64_t seed, std::uint64_t id, int k) {
+  std::uint64_t z = seed * 0x9E3779B97F4A7C15ULL + id * 0xBF58476D1CE4E5B9ULL + static_cast<std::uint64_t>(k + 1) * 0x94D049BB133111EBULL;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  z ^= z >> 31;
+  return static_cast<double>(z >> 11) * 0x1.0p-53;  // [0, 1)
+}
+
+class DepositionScene final : public DemScene {
+ public:
+  DepositionScene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir)
+      : DemScene(root, comm, case_dir) {
+    const ConfigNode d = root.section("deposition");
+    material_ = dem_->model().material_index(d.text("material"), d.key_path("material"));
+    diameter_ = d.real("diameter", Dim::length, Range::positive());
+    spacing_ = d.real("lattice_spacing", Dim::length, Range::positive(), 1.1 * diameter_);
+    if (spacing_ < diameter_) d.fail("lattice_spacing", "at least the grain diameter (grains must not overlap)");
+    jitter_ = d.real("jitter", Dim::length, Range::non_negative(), 0.03 * diameter_);
+    if (spacing_ - diameter_ < 2 * jitter_ && jitter_ > 0)
+      d.fail("jitter", "at most (lattice_spacing - diameter) / 2, so that grains start apart");
+    seed_ = static_cast<std::uint64_t>(d.integer("seed", 0, 1L << 40, 4711));
+    region_lo_ = d.vec3("region_min", Dim::length);
+    region_hi_ = d.vec3("region_max", Dim::length);
+    const Vec3 lo = decomp_->global_lo(), hi = decomp_->global_hi();
+    for (int k = 0; k < 3; ++k) {
+      if (!(region_hi_[k] > region_lo_[k])) d.fail("region_max", "larger than region_min in every direction");
+      if (region_lo_[k] < lo[k] || region_hi_[k] > hi[k])
+        d.fail("region_max", "a region inside domain.box_min .. domain.box_max (grains must start in the box)");
+      counts_[k] = static_cast<long>(std::floor((region_hi_[k] - region_lo_[k]) / spacing_));
+      if (counts_[k] < 1) d.fail("region_max", "a region at least one lattice spacing wide");
+    }
+    if (counts_[0] * counts_[1] * counts_[2] > kMaxBodyId) d.fail("region_max", "a region holding fewer than 2^32 grains");
+    settled_energy_ = d.real("settled_kinetic_energy", Dim::energy, Range::positive());
+    min_time_ = d.real("min_time", Dim::time, Range::non_negative(), 0.0);
+    if (!end_time_) root.section("run").fail("end_time", "is required: the longest the deposition may take");
+  }
+  const char* name() const override { return "deposition"; }
+
+ protected:
+  void create_bodies() override {
+    std::int64_t id = 1;
+    const double r = 0.5 * diameter_;
+    for (long k = 0; k < counts_[2]; ++k)
+      for (long j = 0; j < counts_[1]; ++j)
+        for (long i = 0; i < counts_[0]; ++i, ++id) {
+          Vec3 x{region_lo_.x + (i + 0.5) * spacing_, region_lo_.y + (j + 0.5) * spacing_,
+                 region_lo_.z + (k + 0.5) * spacing_};
+          for (int c = 0; c < 3; ++c) x[c] += jitter_ * (2 * unit_random(seed_, id, c) - 1);
+          dem_->add_sphere(id, material_, r, x, {});
+        }
+  }
+
+  bool finished(const DemStats& s) override {
+    const double ke = s.kinetic_translational + s.kinetic_rotational;
+    if (dem_->time() >= min_time_ && ke < settled_energy_) {
+      settled_ = true;
+      settle_time_ = dem_->time();
+    }
+    return settled_;
+  }
+
+  void restore(const CheckpointExtras& e) override {
+    if (e.count("settled")) settled_ = e.at("settled") != 0;
+  }
+  CheckpointExtras extras() const override { return {{"settled", settled_ ? 1.0 : 0.0}}; }
+
+  void finish(const RunOptions& opt) override { write_lammps_data(opt.output_dir + "/bed.data", *dem_); }
+
+  void quantities(nlohmann::json& q) override {
+    // Packing fraction by centre counting in slabs of one diameter over the central region
+    // (2 d from the side walls), averaged from 2 d above the floor to 3 d below the highest centre.
+    const ParticleStore& p = dem_->particles();
+    MPI_Comm comm = decomp_->comm();
+    double z_top = -1e300, z_floor = 1e300;
+    for (std::size_t i = 0; i < p.owned; ++i) z_top = std::max(z_top, p.x[3 * i + 2]);
+    for (std::size_t i = 0; i < p.owned; ++i) z_floor = std::min(z_floor, p.x[3 * i + 2] - p.radius[i]);
+    MPI_Allreduce(MPI_IN_PLACE, &z_top, 1, MPI_DOUBLE, MPI_MAX, comm);
+    MPI_Allreduce(MPI_IN_PLACE, &z_floor, 1, MPI_DOUBLE, MPI_MIN, comm);
+    const Vec3 lo = decomp_->global_lo(), hi = decomp_->global_hi();
+    const double d = diameter_, z0 = z_floor + 2 * d, z1 = z_top - 3 * d;
+    const double ax = (hi.x - lo.x) - 4 * d, ay = (hi.y - lo.y) - 4 * d;
+    double solid = 0, weight = 0;
+    for (std::size_t i = 0; i < p.owned; ++i) {
+      const Vec3 x = p.pos(i);
+      weight += p.mass[i];
+      if (x.x < lo.x + 2 * d || x.x > hi.x - 2 * d || x.y < lo.y + 2 * d || x.y > hi.y - 2 * d) continue;
+      if (x.z < z0 || x.z >= z1) continue;
+      solid += 4.0 / 3.0 * std::numbers::pi * std::pow(p.radius[i], 3);
+    }
+    double sums[2] = {solid, weight};
+    MPI_Allreduce(MPI_IN_PLACE, sums, 2, MPI_DOUBLE, MPI_SUM, comm);
+    const double sample = ax * ay * (z1 - z0);
+    q["packing_fraction"] = (ax > 0 && ay > 0 && z1 > z0) ? sums[0] / sample : 0.0;
+    q["bed_height"] = z_top + 0.5 * d - z_floor;
+    q["settled"] = settled_;
+    q["settle_time"] = settled_ ? settle_time_ : dem_->time();
+    // Floor reaction over the bed's weight: 1 for a hydrostatic bed, below 1 with wall friction (Janssen).
+    double floor = 0;
+    const auto& prims = dem_->walls().primitives();
+    for (std::size_t k = 0; k < prims.size(); ++k)
+      if (prims[k].kind == WallPrimitive::Kind::plane && prims[k].normal.z > 0.99) floor -= dem_->wall_forces()[k].z;
+    MPI_Allreduce(MPI_IN_PLACE, &floor, 1, MPI_DOUBLE, MPI_SUM, comm);
+    q["floor_force_over_weight"] = floor / (sums[1] * norm(dem_->gravity()));
+  }
+
+ private:
+  int material_ = 0;
+  double diameter_ = 0, spacing_ = 0, jitter_ = 0, settled_energy_ = 0, min_time_ = 0, settle_time_ = 0;
+  std::uint64_t seed_ = 0;
+  Vec3 region_lo_, region_hi_;
+  long counts_[3] = {0, 0, 0};
+  bool settled_ = false;
+};
+
+}  // namespace
+
+std::unique_ptr<DemScene> make_deposition_scene(const ConfigNode& root, MPI_Comm comm, const std::string& dir) {
+  return std::make_unique<DepositionScene>(root, comm, dir);
+}
+
+}  // namespace tessera

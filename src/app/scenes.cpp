@@ -1,0 +1,14 @@
+// SPDX-License-Identifier: MIT
+#include "app/scenes.hpp"
+
+#include "core/errors.hpp"
+
+namespace tessera {
+
+std::unique_ptr<DemScene> make_scene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir) {
+  const std::string scene = root.choice("scene", {"deposition", "bed"});
+  if (scene == "deposition") return make_deposition_scene(root, comm, case_dir);
+  return make_bed_scene(root, comm, case_dir);
+}
+
+}  // namespace tessera

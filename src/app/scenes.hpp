@@ -1,0 +1,14 @@
+// SPDX-License-Identifier: MIT
+// The scene registry: one line per scene (name -> factory).
+#pragma once
+#include <memory>
+#include <string>
+
+#include "app/dem_scene.hpp"
+
+namespace tessera {
+
+std::unique_ptr<DemScene> make_deposition_scene(const ConfigNode& root, MPI_Comm comm, const std::string& dir);
+std::unique_ptr<DemScene> make_bed_scene(const ConfigNode& root, MPI_Comm comm, const std::string& dir);
+
+}  // namespace tessera

@@ -1,0 +1,25 @@
+// SPDX-License-Identifier: MIT
+// Tangential contact history keyed by the global ids of the two bodies (lower id first), so that
+// it survives neighbour-list rebuilds, migration between ranks and restarts. The key packs two
+// 32-bit ids; ids must be below 2^32 (checked where bodies are created).
+#pragma once
+#include <array>
+#include <cstdint>
+#include <unordered_map>
+
+namespace tessera {
+
+using PairKey = std::uint64_t;
+using HistoryMap = std::unordered_map<PairKey, std::array<double, 3>>;
+
+inline PairKey pair_key(std::int64_t a, std::int64_t b) {
+  const auto lo = static_cast<std::uint64_t>(a < b ? a : b);
+  const auto hi = static_cast<std::uint64_t>(a < b ? b : a);
+  return (lo << 32) | hi;
+}
+inline std::int64_t key_low(PairKey k) { return static_cast<std::int64_t>(k >> 32); }
+inline std::int64_t key_high(PairKey k) { return static_cast<std::int64_t>(k & 0xffffffffULL); }
+
+constexpr std::int64_t kMaxBodyId = (std::int64_t{1} << 32) - 1;
+
+}  // namespace tessera

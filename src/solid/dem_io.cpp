@@ -1,0 +1,293 @@
+// SPDX-License-Identifier: MIT
+#include "solid/dem_io.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <numbers>
+#include <sstream>
+
+#include "core/errors.hpp"
+#include "core/h5_file.hpp"
+
+namespace tessera {
+
+namespace fs = std::filesystem;
+
+void write_file_atomically(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::trunc);
+    out << text;
+    out.flush();
+    if (!out) throw RunError("cannot write " + tmp);
+  }
+  fs::rename(tmp, path);
+}
+
+namespace {
+
+int comm_rank(MPI_Comm c) {
+  int r = 0;
+  MPI_Comm_rank(c, &r);
+  return r;
+}
+
+void write_xdmf(const std::string& path, const std::vector<std::pair<double, std::pair<std::string, long>>>& e) {
+  std::ostringstream o;
+  o << std::setprecision(17);
+  o << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
+    << "  <Grid Name=\"bodies\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+  for (const auto& [time, fe] : e) {
+    const auto& [file, n] = fe;
+    auto item = [&](const std::string& ds, int cols) {
+      std::ostringstream s;
+      s << "<DataItem Format=\"HDF\" NumberType=\"" << (ds == "id" ? "Int\" Precision=\"8" : "Float\" Precision=\"8")
+        << "\" Dimensions=\"" << n << (cols > 1 ? " " + std::to_string(cols) : "") << "\">" << file << ":/" << ds
+        << "</DataItem>";
+      return s.str();
+    };
+    o << "   <Grid Name=\"bodies\" GridType=\"Uniform\">\n"
+      << "    <Time Value=\"" << time << "\"/>\n"
+      << "    <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n << "\"/>\n"
+      << "    <Geometry GeometryType=\"XYZ\">" << item("position", 3) << "</Geometry>\n"
+      << "    <Attribute Name=\"velocity\" AttributeType=\"Vector\" Center=\"Node\">" << item("velocity", 3) << "</Attribute>\n"
+      << "    <Attribute Name=\"angular_velocity\" AttributeType=\"Vector\" Center=\"Node\">" << item("angular_velocity", 3) << "</Attribute>\n"
+      << "    <Attribute Name=\"orientation\" AttributeType=\"Matrix\" Center=\"Node\">" << item("orientation", 4) << "</Attribute>\n"
+      << "    <Attribute Name=\"radius\" AttributeType=\"Scalar\" Center=\"Node\">" << item("radius", 1) << "</Attribute>\n"
+      << "    <Attribute Name=\"id\" AttributeType=\"Scalar\" Center=\"Node\">" << item("id", 1) << "</Attribute>\n"
+      << "    <Attribute Name=\"shape\" AttributeType=\"Scalar\" Center=\"Node\">" << item("shape", 1) << "</Attribute>\n"
+      << "   </Grid>\n";
+  }
+  o << "  </Grid>\n </Domain>\n</Xdmf>\n";
+  write_file_atomically(path, o.str());
+}
+
+}  // namespace
+
+void SnapshotSeries::write(const DemSolver& dem) {
+  MPI_Comm comm = dem.decomposition().comm();
+  const ParticleStore& p = dem.particles();
+  char name[64];
+  std::snprintf(name, sizeof name, "particles_%06zu.h5", entries_.size());
+  if (comm_rank(comm) == 0) fs::create_directories(dir_);
+  MPI_Barrier(comm);
+  long n = 0;
+  {
+    H5File f = H5File::create(dir_ + "/" + name, comm);
+    const std::size_t m = p.owned;
+    n = f.write_rows("position", p.x.data(), m, 3);
+    f.write_rows("velocity", p.v.data(), m, 3);
+    f.write_rows("angular_velocity", p.omega.data(), m, 3);
+    f.write_rows("orientation", p.q.data(), m, 4);
+    f.write_rows("radius", p.radius.data(), m, 1);
+    f.write_rows("id", p.id.data(), m, 1);
+    std::vector<double> shape(p.shape.begin(), p.shape.begin() + static_cast<std::ptrdiff_t>(m));
+    f.write_rows("shape", shape.data(), m, 1);
+    f.set_attribute("time", dem.time());
+  }
+  entries_.push_back({dem.time(), name, n});
+  if (comm_rank(comm) == 0) {
+    std::vector<std::pair<double, std::pair<std::string, long>>> e;
+    for (const auto& x : entries_) e.push_back({x.time, {x.file, x.bodies}});
+    write_xdmf(dir_ + "/particles.xmf", e);
+  }
+}
+
+void write_checkpoint(const std::string& path, const DemSolver& dem, const CheckpointExtras& extras) {
+  MPI_Comm comm = dem.decomposition().comm();
+  const ParticleStore& p = dem.particles();
+  const std::string tmp = path + ".tmp";
+  {
+    H5File f = H5File::create(tmp, comm);
+    std::vector<double> state;
+    state.reserve(static_cast<std::size_t>(p.packed_size()) * p.owned);
+    for (std::size_t i = 0; i < p.owned; ++i) p.pack(i, state);
+    f.write_rows("bodies", state.data(), p.owned, p.packed_size());
+    // Each pair's history is kept by every rank evaluating it; the owner of the lower id writes it.
+    std::vector<std::uint64_t> keys;
+    std::vector<double> hist;
+    for (const auto& [key, h] : dem.histories()) {
+      const auto lo = key_low(key);
+      const auto it = std::lower_bound(p.id.begin(), p.id.begin() + static_cast<std::ptrdiff_t>(p.owned), lo);
+      if (it == p.id.begin() + static_cast<std::ptrdiff_t>(p.owned) || *it != lo) continue;
+      keys.push_back(key);
+      hist.insert(hist.end(), h.begin(), h.end());
+    }
+    f.write_rows("pair_keys", keys.data(), keys.size(), 1);
+    f.write_rows("pair_history", hist.data(), keys.size(), 3);
+    f.set_attribute("format", std::string("tessera-dem-checkpoint-1"));
+    f.set_attribute("time", dem.time());
+    f.set_attribute("steps", dem.steps());
+    f.set_attribute("wall_slots", static_cast<long>(p.wall_slots));
+    for (const auto& [k, v] : extras) f.set_attribute("extra:" + k, v);
+    std::string names;
+    for (const auto& [k, v] : extras) names += k + "\n";
+    f.set_attribute("extras", names);
+  }
+  MPI_Barrier(comm);
+  if (comm_rank(comm) == 0) fs::rename(tmp, path);
+  MPI_Barrier(comm);
+}
+
+CheckpointExtras read_checkpoint(const std::string& path, DemSolver& dem) {
+  MPI_Comm comm = dem.decomposition().comm();
+  H5File f = H5File::open_read(path, comm);
+  if (f.attribute_string("format") != "tessera-dem-checkpoint-1")
+    throw InputError("restart", path, "a Tessera DEM checkpoint (format tessera-dem-checkpoint-1)");
+  ParticleStore& p = dem.particles();
+  if (f.attribute_long("wall_slots") != p.wall_slots)
+    throw InputError("restart", path, "a checkpoint made with the same walls as this case (" +
+                                          std::to_string(p.wall_slots) + " wall primitives)");
+  int cols = 0;
+  const auto state = f.read_all<double>("bodies", cols);
+  if (cols != p.packed_size()) throw InputError("restart", path, "a checkpoint with the same body layout");
+  const Decomposition& decomp = dem.decomposition();
+  for (std::size_t off = 0; off < state.size(); off += static_cast<std::size_t>(cols)) {
+    const Vec3 x{state[off + 6], state[off + 7], state[off + 8]};
+    if (decomp.owns(x)) p.unpack_append(&state[off]);
+  }
+  p.owned = p.size();
+  const auto keys = f.read_all<std::uint64_t>("pair_keys", cols);
+  const auto hist = f.read_all<double>("pair_history", cols);
+  HistoryMap h;
+  for (std::size_t k = 0; k < keys.size(); ++k) h[keys[k]] = {hist[3 * k], hist[3 * k + 1], hist[3 * k + 2]};
+  dem.preload_histories(std::move(h));
+  dem.set_clock(f.attribute_double("time"), f.attribute_long("steps"));
+  CheckpointExtras extras;
+  std::istringstream names(f.attribute_string("extras"));
+  for (std::string k; std::getline(names, k);)
+    if (!k.empty()) extras[k] = f.attribute_double("extra:" + k);
+  return extras;
+}
+
+void write_lammps_data(const std::string& path, const DemSolver& dem) {
+  MPI_Comm comm = dem.decomposition().comm();
+  const ParticleStore& p = dem.particles();
+  constexpr int cols = 12;  // id type diameter density x y z vx vy vz (wx wy wz below)
+  std::vector<double> rows;
+  for (std::size_t i = 0; i < p.owned; ++i) {
+    const double vol = 4.0 / 3.0 * std::numbers::pi * std::pow(p.radius[i], 3);
+    const double r[cols] = {static_cast<double>(p.id[i]), static_cast<double>(p.material[i] + 1),
+                            2 * p.radius[i], p.mass[i] / vol, p.x[3 * i], p.x[3 * i + 1], p.x[3 * i + 2],
+                            p.v[3 * i], p.v[3 * i + 1], p.v[3 * i + 2], 0, 0};
+    rows.insert(rows.end(), r, r + cols);
+    rows.insert(rows.end(), &p.omega[3 * i], &p.omega[3 * i] + 3);
+  }
+  constexpr int stride = cols + 3;
+  int size = 1, mine = static_cast<int>(rows.size());
+  MPI_Comm_size(comm, &size);
+  std::vector<int> counts(size), displs(size, 0);
+  MPI_Gather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm);
+  const bool root = comm_rank(comm) == 0;
+  std::vector<double> all;
+  if (root) {
+    for (int r = 1; r < size; ++r) displs[r] = displs[r - 1] + counts[r - 1];
+    all.resize(static_cast<std::size_t>(displs[size - 1] + counts[size - 1]));
+  }
+  MPI_Gatherv(rows.data(), mine, MPI_DOUBLE, all.data(), counts.data(), displs.data(), MPI_DOUBLE, 0, comm);
+  if (!root) return;
+  const std::size_t n = all.size() / stride;
+  std::vector<std::size_t> order(n);
+  for (std::size_t k = 0; k < n; ++k) order[k] = k;
+  std::sort(order.begin(), order.end(), [&](auto a, auto b) { return all[a * stride] < all[b * stride]; });
+  const Vec3 lo = dem.decomposition().global_lo(), hi = dem.decomposition().global_hi();
+  std::ostringstream o;
+  o << std::setprecision(17);
+  o << "LAMMPS data file written by Tessera (atom_style sphere), t = " << dem.time() << " s\n\n"
+    << n << " atoms\n" << dem.model().material_count() << " atom types\n\n"
+    << lo.x << " " << hi.x << " xlo xhi\n" << lo.y << " " << hi.y << " ylo yhi\n" << lo.z << " " << hi.z
+    << " zlo zhi\n\nAtoms # sphere\n\n";
+  for (const auto k : order) {
+    const double* r = &all[k * stride];
+    o << static_cast<long>(r[0]) << " " << static_cast<int>(r[1]) << " " << r[2] << " " << r[3] << " " << r[4]
+      << " " << r[5] << " " << r[6] << "\n";
+  }
+  o << "\nVelocities\n\n";
+  for (const auto k : order) {
+    const double* r = &all[k * stride];
+    o << static_cast<long>(r[0]) << " " << r[7] << " " << r[8] << " " << r[9] << " " << r[12] << " " << r[13]
+      << " " << r[14] << "\n";
+  }
+  write_file_atomically(path, o.str());
+}
+
+long read_lammps_data(const std::string& path, DemSolver& dem, const std::vector<int>& type_materials,
+                      const std::string& key) {
+  std::ifstream in(path);
+  if (!in) throw InputError(key, path, "a readable LAMMPS data file");
+  std::string line;
+  long declared = -1;
+  struct Row {
+    long id;
+    int type;
+    double d, rho;
+    Vec3 x, v, w;
+  };
+  std::map<long, Row> rows;
+  enum { header, atoms, velocities, other } section = header;
+  std::getline(in, line);  // title line
+  long line_no = 1;
+  while (std::getline(in, line)) {
+    ++line_no;
+    const auto hash = line.find('#');
+    std::string body = line.substr(0, hash);
+    std::istringstream s(body);
+    std::string first;
+    if (!(s >> first)) continue;
+    if (first == "Atoms") {
+      if (line.find("sphere") == std::string::npos && hash != std::string::npos)
+        throw InputError(key, path, "atom_style sphere data (Atoms # sphere)");
+      section = atoms;
+      continue;
+    }
+    if (first == "Velocities") {
+      section = velocities;
+      continue;
+    }
+    if (std::isalpha(static_cast<unsigned char>(first[0]))) {
+      section = other;
+      continue;
+    }
+    if (section == header) {
+      if (body.find("atoms") != std::string::npos) declared = std::stol(first);
+      continue;
+    }
+    std::istringstream r(body);
+    if (section == atoms) {
+      Row row{};
+      if (!(r >> row.id >> row.type >> row.d >> row.rho >> row.x.x >> row.x.y >> row.x.z))
+        throw InputError(key, path + ":" + std::to_string(line_no), "lines 'id type diameter density x y z'");
+      if (row.type < 1 || row.type > static_cast<int>(type_materials.size()))
+        throw InputError(key, path + ":" + std::to_string(line_no),
+                         "atom types 1.." + std::to_string(type_materials.size()) + " (one material per type)");
+      if (!(row.d > 0) || !(row.rho > 0))
+        throw InputError(key, path + ":" + std::to_string(line_no), "positive diameter and density");
+      rows[row.id] = row;
+    } else if (section == velocities) {
+      long id = 0;
+      Vec3 v, w;
+      if (!(r >> id >> v.x >> v.y >> v.z >> w.x >> w.y >> w.z))
+        throw InputError(key, path + ":" + std::to_string(line_no), "velocity lines 'id vx vy vz wx wy wz'");
+      const auto it = rows.find(id);
+      if (it == rows.end()) throw InputError(key, path + ":" + std::to_string(line_no), "velocities of known atoms");
+      it->second.v = v, it->second.w = w;
+    }
+  }
+  if (declared >= 0 && declared != static_cast<long>(rows.size()))
+    throw InputError(key, path, std::to_string(declared) + " atoms as its header declares, found " +
+                                    std::to_string(rows.size()));
+  const Vec3 lo = dem.decomposition().global_lo(), hi = dem.decomposition().global_hi();
+  for (const auto& [id, row] : rows) {
+    for (int d = 0; d < 3; ++d)
+      if (row.x[d] < lo[d] || row.x[d] > hi[d])
+        throw InputError(key, path, "bodies inside domain.box (body " + std::to_string(id) + " is outside)");
+    dem.add_sphere(id, type_materials[row.type - 1], 0.5 * row.d, row.x, row.v, row.w, row.rho);
+  }
+  return static_cast<long>(rows.size());
+}
+
+}  // namespace tessera

@@ -1,0 +1,52 @@
+// SPDX-License-Identifier: MIT
+// DEM input/output: snapshots (HDF5 + an XDMF time series ParaView opens), checkpoints (HDF5,
+// written to a temporary name then renamed, so a kill mid-write loses nothing) and LAMMPS data
+// files (atom_style sphere: id type diameter density x y z), so beds move between Tessera, LAMMPS
+// and LIGGGHTS.
+#pragma once
+#include <map>
+#include <string>
+#include <vector>
+
+#include "solid/dem_solver.hpp"
+
+namespace tessera {
+
+class SnapshotSeries {
+ public:
+  explicit SnapshotSeries(std::string dir) : dir_(std::move(dir)) {}
+  // Collective: writes DIR/particles_NNNNNN.h5 and rewrites DIR/particles.xmf.
+  void write(const DemSolver& dem);
+  std::size_t count() const { return entries_.size(); }
+
+ private:
+  struct Entry {
+    double time;
+    std::string file;
+    long bodies;
+  };
+  std::string dir_;
+  std::vector<Entry> entries_;
+};
+
+// Extra scalar state a scene keeps in its checkpoint (e.g. its stage), by name.
+using CheckpointExtras = std::map<std::string, double>;
+
+// Collective.
+void write_checkpoint(const std::string& path, const DemSolver& dem, const CheckpointExtras& extras = {});
+// Collective: loads bodies owned by this rank, the histories and the clock; returns the extras.
+// Call before dem.setup(false).
+CheckpointExtras read_checkpoint(const std::string& path, DemSolver& dem);
+
+// Collective: gathers on rank 0, writes bodies sorted by id. Types are material index + 1.
+void write_lammps_data(const std::string& path, const DemSolver& dem);
+// Collective: every rank reads the file and keeps its own bodies. type_materials[t - 1] is the
+// material of LAMMPS type t; the mass comes from the file's per-atom density, as in LAMMPS.
+// Returns the number of bodies read.
+long read_lammps_data(const std::string& path, DemSolver& dem, const std::vector<int>& type_materials,
+                      const std::string& key_for_errors);
+
+// Writes text to path atomically (temporary file + rename); rank 0 only.
+void write_file_atomically(const std::string& path, const std::string& text);
+
+}  // namespace tessera

@@ -1,0 +1,323 @@
+// SPDX-License-Identifier: MIT
+#include "solid/dem_solver.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <numeric>
+#include <string>
+
+#include "core/errors.hpp"
+
+namespace tessera {
+
+DemSettings DemSettings::from_config(const ConfigNode& solid) {
+  DemSettings s;
+  s.gravity = solid.vec3("gravity", Dim::acceleration, s.gravity);
+  if (solid.has("time_step")) s.time_step = solid.real("time_step", Dim::time, Range::positive());
+  else solid.real("time_step", Dim::time, Range::positive(), 0.0);  // 0 in the resolved case = auto
+  s.steps_per_contact = solid.real("steps_per_contact", Dim::none, Range::closed(5, 1e6), s.steps_per_contact);
+  s.impact_velocity = solid.real("impact_velocity", Dim::velocity, Range::positive(), s.impact_velocity);
+  if (solid.has("neighbor_skin")) s.skin = solid.real("neighbor_skin", Dim::length, Range::positive());
+  else solid.real("neighbor_skin", Dim::length, Range::positive(), 0.0);  // 0 = auto (0.5 r_min)
+  return s;
+}
+
+DemSolver::DemSolver(const Decomposition& decomp, ContactModel model, Walls walls, DemSettings settings)
+    : decomp_(decomp), model_(std::move(model)), walls_(std::move(walls)), settings_(settings), halo_(decomp) {
+  p_.wall_slots = walls_.slots();
+  wall_force_.assign(walls_.slots(), Vec3{});
+}
+
+void DemSolver::add_sphere(std::int64_t id, int material, double radius, const Vec3& x, const Vec3& v,
+                           const Vec3& omega, double density) {
+  if (id < 0 || id > kMaxBodyId) throw InputError("body id", std::to_string(id), "an id in [0, 2^32)");
+  if (!decomp_.owns(x)) return;
+  const double rho = density > 0 ? density : model_.materials()[material].density;
+  const double m = rho * 4.0 / 3.0 * std::numbers::pi * radius * radius * radius;
+  p_.push_back(id, material, radius, m, 0.4 * m * radius * radius, x, v, omega);
+  p_.owned = p_.size();
+}
+
+void DemSolver::setup(bool fresh) {
+  MPI_Comm comm = decomp_.comm();
+  double local[3] = {1e300, 1e300, 0};  // min mass, min radius, -max radius
+  std::vector<int> used(model_.material_count(), 0);
+  for (std::size_t i = 0; i < p_.owned; ++i) {
+    local[0] = std::min(local[0], p_.mass[i]);
+    local[1] = std::min(local[1], p_.radius[i]);
+    local[2] = std::min(local[2], -p_.radius[i]);
+    used[p_.material[i]] = 1;
+  }
+  double global[3];
+  MPI_Allreduce(local, global, 3, MPI_DOUBLE, MPI_MIN, comm);
+  MPI_Allreduce(MPI_IN_PLACE, used.data(), static_cast<int>(used.size()), MPI_INT, MPI_MAX, comm);
+  long n_local = static_cast<long>(p_.owned), n = 0;
+  MPI_Allreduce(&n_local, &n, 1, MPI_LONG, MPI_SUM, comm);
+  if (n == 0) throw InputError("bodies", "0", "at least one body in the domain");
+  const double m_min = global[0], r_min = global[1];
+  r_max_ = -global[2];
+
+  std::vector<int> body_materials;
+  for (int m = 0; m < model_.material_count(); ++m)
+    if (used[m]) body_materials.push_back(m);
+  for (int a : body_materials)
+    for (int b : body_materials)
+      if (!model_.has_pair(a, b))
+        throw InputError("solid.contact.pairs", "",
+                         "needs an entry for materials [" + model_.materials()[a].name + ", " +
+                             model_.materials()[b].name + "]");
+  walls_.check_pairs(model_, body_materials);
+
+  // Contact duration (T6): the shortest over the pairs in use, for the lightest body.
+  t_contact_ = 1e300;
+  for (int a : body_materials) {
+    for (int b : body_materials)
+      t_contact_ = std::min(t_contact_, model_.contact_duration(a, b, 0.5 * m_min, 0.5 * r_min,
+                                                                settings_.impact_velocity));
+    for (const auto& w : walls_.primitives())
+      t_contact_ = std::min(t_contact_, model_.contact_duration(a, w.material, m_min, r_min,
+                                                                settings_.impact_velocity));
+  }
+  dt_ = settings_.time_step ? *settings_.time_step : t_contact_ / settings_.steps_per_contact;
+  skin_ = settings_.skin ? *settings_.skin : 0.5 * r_min;
+
+  rebuild();
+  if (fresh) {
+    // Forces of the initial state for the first half-kick; histories must not advance here.
+    const std::vector<double> pair_history = list_.history, wall_history = p_.wall_history;
+    compute_forces(false);
+    list_.history = pair_history;
+    p_.wall_history = wall_history;
+  }
+}
+
+HistoryMap DemSolver::histories() const {
+  HistoryMap h;
+  list_.collect(h);
+  return h;
+}
+
+void DemSolver::sort_owned_by_id() {
+  // Storage in id order keeps the canonical pair order close to memory order.
+  auto by_id = [&](std::size_t a, std::size_t b) { return p_.id[a] < p_.id[b]; };
+  std::vector<std::size_t> order(p_.owned);
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  if (std::is_sorted(order.begin(), order.end(), by_id)) return;
+  std::sort(order.begin(), order.end(), by_id);
+  std::vector<double> buf;
+  buf.reserve(static_cast<std::size_t>(p_.packed_size()) * p_.owned);
+  for (const auto i : order) p_.pack(i, buf);
+  const std::size_t owned = p_.owned, stride = static_cast<std::size_t>(p_.packed_size());
+  p_.resize(0);
+  for (std::size_t k = 0; k < owned; ++k) p_.unpack_append(&buf[k * stride]);
+  p_.owned = owned;
+  p_.ghosts = 0;
+}
+
+void DemSolver::rebuild() {
+  HistoryMap histories = std::move(pending_);
+  pending_.clear();
+  list_.collect(histories);
+  {
+    auto t = timers_.scope("migration");
+    halo_.migrate(p_, histories);
+    sort_owned_by_id();
+  }
+  {
+    auto t = timers_.scope("ghost_comm");
+    halo_.build_ghosts(p_, r_max_ + skin_);
+  }
+  {
+    auto t = timers_.scope("neighbor");
+    list_.build(p_, skin_, histories);
+    x_build_.assign(p_.x.begin(), p_.x.begin() + 3 * static_cast<std::ptrdiff_t>(p_.owned));
+  }
+}
+
+bool DemSolver::needs_rebuild() {
+  double max2 = 0;
+  const double* x = p_.x.data();
+  const double* x0 = x_build_.data();
+  for (std::size_t k = 0; k < 3 * p_.owned; k += 3) {
+    const double dx = x[k] - x0[k], dy = x[k + 1] - x0[k + 1], dz = x[k + 2] - x0[k + 2];
+    max2 = std::max(max2, dx * dx + dy * dy + dz * dz);
+  }
+  auto t = timers_.scope("reduction");
+  MPI_Allreduce(MPI_IN_PLACE, &max2, 1, MPI_DOUBLE, MPI_MAX, decomp_.comm());
+  return max2 > 0.25 * skin_ * skin_;
+}
+
+void DemSolver::integrate_first() {
+  const double h = 0.5 * dt_;
+  const Vec3 g = settings_.gravity;
+  for (std::size_t i = 0; i < p_.owned; ++i) {
+    const double inv_m = 1.0 / p_.mass[i], inv_i = 1.0 / p_.inertia[i];
+    double* v = &p_.v[3 * i];
+    double* w = &p_.omega[3 * i];
+    double* x = &p_.x[3 * i];
+    const double* f = &p_.f[3 * i];
+    const double* t = &p_.torque[3 * i];
+    for (int k = 0; k < 3; ++k) {
+      v[k] += h * (f[k] * inv_m + g[k]);
+      w[k] += h * t[k] * inv_i;
+      x[k] += dt_ * v[k];
+    }
+    // Orientation: q <- normalize(q + dt/2 (0, w) q), first order; spheres need it for output only.
+    double* q = &p_.q[4 * i];
+    const double qw = q[0], qx = q[1], qy = q[2], qz = q[3];
+    q[0] = qw + h * (-w[0] * qx - w[1] * qy - w[2] * qz);
+    q[1] = qx + h * (w[0] * qw + w[1] * qz - w[2] * qy);
+    q[2] = qy + h * (w[1] * qw + w[2] * qx - w[0] * qz);
+    q[3] = qz + h * (w[2] * qw + w[0] * qy - w[1] * qx);
+    const double inv_norm = 1.0 / std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    for (int k = 0; k < 4; ++k) q[k] *= inv_norm;
+  }
+}
+
+void DemSolver::integrate_second() {
+  const double h = 0.5 * dt_;
+  const Vec3 g = settings_.gravity;
+  for (std::size_t i = 0; i < p_.owned; ++i) {
+    const double inv_m = 1.0 / p_.mass[i], inv_i = 1.0 / p_.inertia[i];
+    for (int k = 0; k < 3; ++k) {
+      p_.v[3 * i + k] += h * (p_.f[3 * i + k] * inv_m + g[k]);
+      p_.omega[3 * i + k] += h * p_.torque[3 * i + k] * inv_i;
+    }
+  }
+}
+
+template <class Law>
+void DemSolver::compute_forces_with(bool update_history) {
+  const std::size_t n = p_.size();
+  std::fill(p_.f.begin(), p_.f.begin() + 3 * static_cast<std::ptrdiff_t>(n), 0.0);
+  std::fill(p_.torque.begin(), p_.torque.begin() + 3 * static_cast<std::ptrdiff_t>(n), 0.0);
+  const double dt = update_history ? dt_ : 0.0;
+  const double* x = p_.x.data();
+  const double* v = p_.v.data();
+  const double* w = p_.omega.data();
+  const double* rad = p_.radius.data();
+  const double* mass = p_.mass.data();
+  const std::int32_t* mat = p_.material.data();
+  double* f = p_.f.data();
+  double* tq = p_.torque.data();
+  const std::size_t np = list_.size();
+  const std::int32_t* first = list_.first.data();
+  const std::int32_t* second = list_.second.data();
+  double* hist = list_.history.data();
+  {
+    auto t = timers_.scope("contact_forces");
+    for (std::size_t k = 0; k < np; ++k) {
+      const std::size_t a = first[k], b = second[k];
+      const Vec3 d = Vec3::load(x + 3 * a) - Vec3::load(x + 3 * b);
+      const double r2 = norm2(d);
+      const double ra = rad[a], rb = rad[b], rsum = ra + rb;
+      double* h = hist + 3 * k;
+      if (r2 >= rsum * rsum) {
+        h[0] = h[1] = h[2] = 0.0;
+        continue;
+      }
+      const double r = std::sqrt(r2);
+      const Vec3 nrm = d * (1.0 / r);
+      const Vec3 v_rel = Vec3::load(v + 3 * a) - Vec3::load(v + 3 * b) -
+                         cross(Vec3::load(w + 3 * a) * ra + Vec3::load(w + 3 * b) * rb, nrm);
+      const double ma = mass[a], mb = mass[b];
+      const Vec3 force = contact_force<Law>(model_.pair(mat[a], mat[b]), rsum - r, nrm, v_rel,
+                                            ma * mb / (ma + mb), ra * rb / rsum, dt, h);
+      force.add_to(f + 3 * a);
+      force.subtract_from(f + 3 * b);
+      const Vec3 nf = cross(nrm, force);
+      (nf * ra).subtract_from(tq + 3 * a);
+      (nf * rb).subtract_from(tq + 3 * b);
+    }
+  }
+  auto t = timers_.scope("wall_forces");
+  const auto& prims = walls_.primitives();
+  const int slots = walls_.slots();
+  for (auto& wf : wall_force_) wf = Vec3{};
+  for (std::size_t i = 0; i < p_.owned; ++i) {
+    const Vec3 xi = Vec3::load(x + 3 * i);
+    const double ri = rad[i];
+    for (int s = 0; s < slots; ++s) {
+      double* h = &p_.wall_history[3 * (i * slots + s)];
+      Vec3 nrm;
+      const double delta = prims[s].overlap(xi, ri, nrm);
+      if (delta <= 0.0) {
+        h[0] = h[1] = h[2] = 0.0;
+        continue;
+      }
+      const Vec3 v_rel = Vec3::load(v + 3 * i) - cross(Vec3::load(w + 3 * i) * ri, nrm);
+      const Vec3 force = contact_force<Law>(model_.pair(mat[i], prims[s].material), delta, nrm, v_rel,
+                                            mass[i], ri, dt, h);
+      force.add_to(f + 3 * i);
+      (cross(nrm, force) * ri).subtract_from(tq + 3 * i);
+      wall_force_[s] -= force;
+    }
+  }
+}
+
+void DemSolver::compute_forces(bool update_history) {
+  if (model_.law() == LawKind::linear_spring_dashpot)
+    compute_forces_with<LinearSpringDashpot>(update_history);
+  else
+    compute_forces_with<HertzMindlin>(update_history);
+}
+
+void DemSolver::step() {
+  {
+    auto t = timers_.scope("integrate");
+    integrate_first();
+  }
+  if (needs_rebuild()) {
+    rebuild();
+  } else {
+    auto t = timers_.scope("ghost_comm");
+    halo_.forward(p_);
+  }
+  compute_forces(true);
+  {
+    auto t = timers_.scope("integrate");
+    integrate_second();
+  }
+  time_ += dt_;
+  ++steps_;
+  if (!(std::isfinite(p_.owned ? p_.x[0] : 0.0)))
+    throw RunError("non-finite body position at step " + std::to_string(steps_) +
+                   ": the time step is too large for the contact stiffness");
+}
+
+DemStats DemSolver::stats() const {
+  double e[3] = {0, 0, 0};
+  long c[3] = {static_cast<long>(p_.owned), 0, 0};
+  for (std::size_t i = 0; i < p_.owned; ++i) {
+    const Vec3 v = p_.vel(i), w = p_.ang(i);
+    e[0] += 0.5 * p_.mass[i] * norm2(v);
+    e[1] += 0.5 * p_.inertia[i] * norm2(w);
+    e[2] = std::max(e[2], norm(v));
+  }
+  for (std::size_t k = 0; k < list_.size(); ++k) {
+    const auto a = static_cast<std::size_t>(list_.first[k]), b = static_cast<std::size_t>(list_.second[k]);
+    if (a >= p_.owned) continue;  // counted by the owner of the lower-id body
+    const double r2 = norm2(p_.pos(a) - p_.pos(b)), rs = p_.radius[a] + p_.radius[b];
+    if (r2 < rs * rs) ++c[1];
+  }
+  for (std::size_t i = 0; i < p_.owned; ++i)
+    for (const auto& w : walls_.primitives()) {
+      Vec3 n;
+      if (w.overlap(p_.pos(i), p_.radius[i], n) > 0) ++c[2];
+    }
+  MPI_Comm comm = decomp_.comm();
+  MPI_Allreduce(MPI_IN_PLACE, e, 2, MPI_DOUBLE, MPI_SUM, comm);
+  MPI_Allreduce(MPI_IN_PLACE, &e[2], 1, MPI_DOUBLE, MPI_MAX, comm);
+  MPI_Allreduce(MPI_IN_PLACE, c, 3, MPI_LONG, MPI_SUM, comm);
+  DemStats s;
+  s.bodies = c[0];
+  s.contacts = c[1];
+  s.wall_contacts = c[2];
+  s.kinetic_translational = e[0];
+  s.kinetic_rotational = e[1];
+  s.max_speed = e[2];
+  return s;
+}
+
+}  // namespace tessera

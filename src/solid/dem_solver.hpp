@@ -1,0 +1,113 @@
+// SPDX-License-Identifier: MIT
+// The DEM: one time step is the ordered list of stages below; timers use the same names.
+//
+//   integrate_first   v += dt/2 (F/m + g), w += dt/2 T/I, x += dt v, q += dt/2 (0,w) q     (T8)
+//   neighbor          if some body moved > skin/2 since the last build (global check):
+//                       migrate -> ghosts -> sort by id -> rebuild the contact list
+//   ghost_comm        otherwise: refresh ghost x, v, w
+//   contact_forces    pairs in canonical order (T1-T4), then walls (T7)
+//   integrate_second  v += dt/2 (F/m + g), w += dt/2 T/I                                   (T8)
+//
+// Velocity Verlet (LAMMPS nve/sphere), second order for conservative forces; the damping and
+// history terms see the half-step velocity.
+#pragma once
+#include <mpi.h>
+
+#include <optional>
+#include <vector>
+
+#include "core/config.hpp"
+#include "core/decomposition.hpp"
+#include "core/timers.hpp"
+#include "solid/contact_history.hpp"
+#include "solid/contact_model.hpp"
+#include "solid/halo.hpp"
+#include "solid/neighbor_list.hpp"
+#include "solid/particles.hpp"
+#include "solid/walls.hpp"
+
+namespace tessera {
+
+struct DemSettings {
+  Vec3 gravity{0, 0, -9.81};
+  std::optional<double> time_step;     // none: from the contact duration (T6)
+  double steps_per_contact = 30;       // dt = t_contact / steps_per_contact when automatic
+  double impact_velocity = 1.0;        // reference speed for the Hertz contact duration
+  std::optional<double> skin;          // none: 0.5 r_min
+
+  static DemSettings from_config(const ConfigNode& solid);
+};
+
+struct DemStats {
+  long bodies = 0;
+  double kinetic_translational = 0, kinetic_rotational = 0;
+  double max_speed = 0;
+  long contacts = 0;       // touching body-body pairs
+  long wall_contacts = 0;  // touching body-wall pairs
+};
+
+class DemSolver {
+ public:
+  DemSolver(const Decomposition& decomp, ContactModel model, Walls walls, DemSettings settings);
+
+  ParticleStore& particles() { return p_; }
+  const ParticleStore& particles() const { return p_; }
+  const ContactModel& model() const { return model_; }
+  const Walls& walls() const { return walls_; }
+  const Decomposition& decomposition() const { return decomp_; }
+  PhaseTimers& timers() { return timers_; }
+
+  // Adds a sphere if this rank owns its centre (every rank may call it with the same list).
+  // density <= 0: the material's density.
+  void add_sphere(std::int64_t id, int material, double radius, const Vec3& x, const Vec3& v,
+                  const Vec3& omega = {}, double density = 0);
+  // Contact histories to use at the first build (restart).
+  void preload_histories(HistoryMap h) { pending_ = std::move(h); }
+
+  // Collective. fresh = true computes the forces of the initial state (histories untouched);
+  // false keeps the forces stored in the bodies (restart).
+  void setup(bool fresh = true);
+  void step();
+
+  double dt() const { return dt_; }
+  double time() const { return time_; }
+  long steps() const { return steps_; }
+  void set_clock(double time, long steps) { time_ = time, steps_ = steps; }
+  double skin() const { return skin_; }
+  const Vec3& gravity() const { return settings_.gravity; }
+  double contact_duration() const { return t_contact_; }
+
+  DemStats stats() const;  // collective
+  // Total force of the owned bodies on each wall primitive at the last force evaluation (local).
+  const std::vector<Vec3>& wall_forces() const { return wall_force_; }
+  // Contact histories of touching pairs (this rank's list; pairs with an owned body).
+  HistoryMap histories() const;
+  std::size_t list_builds() const { return list_.builds; }
+  std::size_t pair_count() const { return list_.size(); }
+
+ private:
+  void rebuild();
+  bool needs_rebuild();
+  void compute_forces(bool update_history);
+  template <class Law>
+  void compute_forces_with(bool update_history);
+  void integrate_first();
+  void integrate_second();
+  void sort_owned_by_id();
+
+  const Decomposition& decomp_;
+  ContactModel model_;
+  Walls walls_;
+  DemSettings settings_;
+  ParticleStore p_;
+  NeighborList list_;
+  Halo halo_;
+  HistoryMap pending_;
+  PhaseTimers timers_;
+  std::vector<double> x_build_;
+  std::vector<Vec3> wall_force_;
+  double dt_ = 0, time_ = 0, skin_ = 0, r_max_ = 0, t_contact_ = 0;
+  long steps_ = 0;
+};
+
+}  // namespace tessera

@@ -1,0 +1,139 @@
+// SPDX-License-Identifier: MIT
+#include "solid/neighbor_list.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace tessera {
+
+void NeighborList::build(const ParticleStore& p, double skin, const HistoryMap& histories) {
+  ++builds;
+  const std::size_t n = p.size();
+  candidates_.clear();
+  first.clear(), second.clear(), keys.clear(), history.clear();
+  if (n == 0) return;
+
+  double r_min = std::numeric_limits<double>::infinity(), r_max = 0;
+  Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  for (std::size_t i = 0; i < n; ++i) {
+    r_min = std::min(r_min, p.radius[i]);
+    r_max = std::max(r_max, p.radius[i]);
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], p.x[3 * i + d]);
+      hi[d] = std::max(hi[d], p.x[3 * i + d]);
+    }
+  }
+  const double r_ref = std::min(r_max, 2.0 * r_min);
+  double h = 2.0 * r_ref + skin;
+  int nc[3];
+  // Keep the grid at most ~4 cells per body (a body flung far away must not blow up memory).
+  for (;;) {
+    double cells = 1;
+    for (int d = 0; d < 3; ++d) {
+      nc[d] = std::max(1, static_cast<int>((hi[d] - lo[d]) / h) + 1);
+      cells *= nc[d];
+    }
+    if (cells <= 4.0 * static_cast<double>(n) + 64) break;
+    h *= 1.5;
+  }
+  const double inv_h = 1.0 / h;
+  auto cell_coord = [&](double x, int d) {
+    return std::clamp(static_cast<int>((x - lo[d]) * inv_h), 0, nc[d] - 1);
+  };
+  const std::size_t ncell = static_cast<std::size_t>(nc[0]) * nc[1] * nc[2];
+  cell_start_.assign(ncell + 1, 0);
+  cell_of_.resize(n);
+  cell_items_.resize(n);
+  std::vector<std::int32_t> large;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (p.radius[i] > r_ref) {
+      large.push_back(static_cast<std::int32_t>(i));
+      cell_of_[i] = -1;
+      continue;
+    }
+    const int c = (cell_coord(p.x[3 * i + 2], 2) * nc[1] + cell_coord(p.x[3 * i + 1], 1)) * nc[0] +
+                  cell_coord(p.x[3 * i], 0);
+    cell_of_[i] = c;
+    ++cell_start_[c + 1];
+  }
+  for (std::size_t c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
+  {
+    std::vector<std::int32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
+    for (std::size_t i = 0; i < n; ++i)
+      if (cell_of_[i] >= 0) cell_items_[fill[cell_of_[i]]++] = static_cast<std::int32_t>(i);
+  }
+
+  const std::size_t owned = p.owned;
+  auto consider = [&](std::size_t a, std::size_t b) {
+    if (a >= owned && b >= owned) return;
+    double r2 = 0;
+    for (int d = 0; d < 3; ++d) {
+      const double dx = p.x[3 * a + d] - p.x[3 * b + d];
+      r2 += dx * dx;
+    }
+    const double cut = p.radius[a] + p.radius[b] + skin;
+    if (r2 >= cut * cut) return;
+    const bool a_low = p.id[a] < p.id[b];
+    candidates_.push_back({pair_key(p.id[a], p.id[b]), static_cast<std::int32_t>(a_low ? a : b),
+                           static_cast<std::int32_t>(a_low ? b : a)});
+  };
+
+  // Small-small: 27 cells around each small body, each pair once (from its lower-id end).
+  for (std::size_t i = 0; i < n; ++i) {
+    if (cell_of_[i] < 0) continue;
+    const int c = cell_of_[i];
+    const int cx = c % nc[0], cy = (c / nc[0]) % nc[1], cz = c / (nc[0] * nc[1]);
+    for (int z = std::max(0, cz - 1); z <= std::min(nc[2] - 1, cz + 1); ++z)
+      for (int y = std::max(0, cy - 1); y <= std::min(nc[1] - 1, cy + 1); ++y)
+        for (int x = std::max(0, cx - 1); x <= std::min(nc[0] - 1, cx + 1); ++x) {
+          const int cc = (z * nc[1] + y) * nc[0] + x;
+          for (int k = cell_start_[cc]; k < cell_start_[cc + 1]; ++k) {
+            const auto j = static_cast<std::size_t>(cell_items_[k]);
+            if (p.id[j] > p.id[i]) consider(i, j);
+          }
+        }
+  }
+  // Large-small: each large body scans the cells within its reach.
+  for (const auto li : large) {
+    const double reach = p.radius[li] + r_ref + skin;
+    int c0[3], c1[3];
+    for (int d = 0; d < 3; ++d) {
+      c0[d] = cell_coord(p.x[3 * li + d] - reach, d);
+      c1[d] = cell_coord(p.x[3 * li + d] + reach, d);
+    }
+    for (int z = c0[2]; z <= c1[2]; ++z)
+      for (int y = c0[1]; y <= c1[1]; ++y)
+        for (int x = c0[0]; x <= c1[0]; ++x) {
+          const int cc = (z * nc[1] + y) * nc[0] + x;
+          for (int k = cell_start_[cc]; k < cell_start_[cc + 1]; ++k) consider(li, cell_items_[k]);
+        }
+  }
+  // Large-large: few of them, all pairs.
+  for (std::size_t a = 0; a < large.size(); ++a)
+    for (std::size_t b = a + 1; b < large.size(); ++b) consider(large[a], large[b]);
+
+  std::sort(candidates_.begin(), candidates_.end(),
+            [](const Candidate& l, const Candidate& r) { return l.key < r.key; });
+  const std::size_t np = candidates_.size();
+  first.resize(np), second.resize(np), keys.resize(np), history.assign(3 * np, 0.0);
+  for (std::size_t k = 0; k < np; ++k) {
+    first[k] = candidates_[k].a;
+    second[k] = candidates_[k].b;
+    keys[k] = candidates_[k].key;
+    if (!histories.empty()) {
+      const auto it = histories.find(keys[k]);
+      if (it != histories.end())
+        for (int d = 0; d < 3; ++d) history[3 * k + d] = it->second[d];
+    }
+  }
+}
+
+void NeighborList::collect(HistoryMap& out) const {
+  for (std::size_t k = 0; k < keys.size(); ++k) {
+    const double* h = &history[3 * k];
+    if (h[0] != 0.0 || h[1] != 0.0 || h[2] != 0.0) out[keys[k]] = {h[0], h[1], h[2]};
+  }
+}
+
+}  // namespace tessera
