@@ -48,6 +48,17 @@ std::string DemScene::resolve_path(const std::string& p) const {
   return path.is_absolute() ? p : (fs::path(case_dir_) / path).lexically_normal().string();
 }
 
+void DemScene::require_pairs(const std::vector<int>& mats) const {
+  const ContactModel& model = dem_->model();
+  for (int a : mats)
+    for (int b : mats)
+      if (!model.has_pair(a, b))
+        throw InputError("solid.contact.pairs", "",
+                         "needs an entry for materials [" + model.materials()[a].name + ", " +
+                             model.materials()[b].name + "]");
+  dem_->walls().check_pairs(model, mats);
+}
+
 nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolved_case) {
   MPI_Comm comm = decomp_->comm();
   const bool root = decomp_->rank() == 0;

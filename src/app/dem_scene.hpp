@@ -48,6 +48,9 @@ class DemScene {
   virtual void restore(const CheckpointExtras& e) { (void)e; }
 
   std::string resolve_path(const std::string& p) const;
+  // Every pair among these body materials, and with every wall, must have contact parameters:
+  // checked at set-up, before any output.
+  void require_pairs(const std::vector<int>& body_materials) const;
 
   std::unique_ptr<Decomposition> decomp_;
   std::unique_ptr<DemSolver> dem_;

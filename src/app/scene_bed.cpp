@@ -20,6 +20,7 @@ class BedScene final : public DemScene {
     for (const auto& m : b.texts("type_materials"))
       types_.push_back(dem_->model().material_index(m, b.key_path("type_materials")));
     if (types_.empty()) b.fail("type_materials", "a list naming the material of each LAMMPS atom type");
+    require_pairs(types_);
     if (!end_time_ && !max_steps_) root.section("run").fail("end_time", "run.end_time or run.max_steps");
   }
   const char* name() const override { return "bed"; }

@@ -52,6 +52,7 @@ class DepositionScene final : public DemScene {
     settled_energy_ = d.real("settled_kinetic_energy", Dim::energy, Range::positive());
     min_time_ = d.real("min_time", Dim::time, Range::non_negative(), 0.0);
     if (!end_time_) root.section("run").fail("end_time", "is required: the longest the deposition may take");
+    require_pairs({material_});
   }
   const char* name() const override { return "deposition"; }
 

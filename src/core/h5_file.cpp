@@ -79,7 +79,8 @@ long H5File::write_rows(const std::string& name, const T* data, std::size_t rows
   }
   const hid_t dxpl = H5Pcreate(H5P_DATASET_XFER);
   H5Pset_dxpl_mpio(dxpl, H5FD_MPIO_COLLECTIVE);
-  check(H5Dwrite(dset, h5_type<T>(), mspace, fspace, dxpl, data), "write " + name);
+  const T dummy{};  // HDF5 rejects a null buffer even for an empty selection
+  if (total > 0) check(H5Dwrite(dset, h5_type<T>(), mspace, fspace, dxpl, rows ? data : &dummy), "write " + name);
   H5Pclose(dxpl);
   H5Sclose(mspace);
   H5Sclose(fspace);

@@ -82,13 +82,9 @@ void ContactModel::set_pair(int a, int b, const PairParams& p) {
 PairParams ContactModel::read_pair(const ConfigNode& node, int a, int b) const {
   PairParams p;
   p.friction = node.real("friction", Dim::none, Range::non_negative());
-  if (law_ == LawKind::hertz_mindlin) {
-    p.e_star = effective_youngs(materials_[a], materials_[b]);
-    p.g_star = effective_shear(materials_[a], materials_[b]);
-    p.restitution = node.real("restitution", Dim::none, Range{0.0, 1.0, true, false});
-    p.hertz_alpha = hertz_alpha_for_restitution(p.restitution);
-    return p;
-  }
+  if (law_ == LawKind::hertz_mindlin)
+    return hertz_mindlin_pair(materials_[a], materials_[b],
+                              node.real("restitution", Dim::none, Range{0.0, 1.0, true, false}), p.friction);
   p.normal_stiffness = node.real("normal_stiffness", Dim::stiffness, Range::positive());
   p.tangential_stiffness =
       node.real("tangential_stiffness", Dim::stiffness, Range::non_negative(), p.normal_stiffness);
@@ -116,6 +112,27 @@ PairParams ContactModel::read_pair(const ConfigNode& node, int a, int b) const {
     p.dt_abs = p.dn_abs, p.dt_rate = p.dn_rate, p.dt_zeta = p.dn_zeta;
     node.real("tangential_damping", Dim::damping, Range::non_negative(), p.dn_abs);
   }
+  return p;
+}
+
+PairParams ContactModel::hertz_mindlin_pair(const Material& a, const Material& b, double restitution,
+                                            double friction) {
+  PairParams p;
+  p.e_star = effective_youngs(a, b);
+  p.g_star = effective_shear(a, b);
+  p.restitution = restitution;
+  p.hertz_alpha = hertz_alpha_for_restitution(restitution);
+  p.friction = friction;
+  return p;
+}
+
+PairParams ContactModel::linear_pair(double kn, double kt, double restitution, double friction) {
+  PairParams p;
+  p.normal_stiffness = kn;
+  p.tangential_stiffness = kt;
+  p.restitution = restitution;
+  p.dn_zeta = p.dt_zeta = linear_zeta_for_restitution(restitution);
+  p.friction = friction;
   return p;
 }
 
@@ -152,7 +169,8 @@ double ContactModel::hertz_restitution_for_alpha(double alpha) {
     x += h / 6 * (k1x + 2 * k2x + 2 * k3x + k4x);
     u += h / 6 * (k1u + 2 * k2u + 2 * k3u + k4u);
     if (x <= 0 && step > 0) return -u;
-    if (u <= 0 && accel(x, u) == 0.0) return 0.0;  // stuck: fully plastic limit
+    // Leaving with the force clamped at zero: no force acts again, the rebound speed is final.
+    if (u < 0 && accel(x, u) == 0.0) return -u;
   }
   return -u;
 }

@@ -44,6 +44,10 @@ class ContactModel {
   // dimensionless impact x'' = -max(0, x^(3/2) + alpha x^(1/4) x'), x(0) = 0, x'(0) = 1.
   static double hertz_alpha_for_restitution(double e);
   static double hertz_restitution_for_alpha(double alpha);
+  // Pair parameters from material data (Hertz-Mindlin: E*, G* of T2) or from stiffnesses with a
+  // restitution coefficient (linear, T5: the same damping ratio on k_n and k_t).
+  static PairParams hertz_mindlin_pair(const Material& a, const Material& b, double restitution, double friction);
+  static PairParams linear_pair(double kn, double kt, double restitution, double friction);
   // zeta of the linear spring-dashpot for restitution e: e = exp(-pi zeta / sqrt(1 - zeta^2)) (T5).
   static double linear_zeta_for_restitution(double e);
 

@@ -63,10 +63,7 @@ void DemSolver::setup(bool fresh) {
     if (used[m]) body_materials.push_back(m);
   for (int a : body_materials)
     for (int b : body_materials)
-      if (!model_.has_pair(a, b))
-        throw InputError("solid.contact.pairs", "",
-                         "needs an entry for materials [" + model_.materials()[a].name + ", " +
-                             model_.materials()[b].name + "]");
+      if (!model_.has_pair(a, b)) throw InputError("solid.contact.pairs", "", "an entry for every material pair in use");
   walls_.check_pairs(model_, body_materials);
 
   // Contact duration (T6): the shortest over the pairs in use, for the lightest body.

@@ -1,0 +1,33 @@
+// SPDX-License-Identifier: MIT
+// A small, violent deposition for parallel tests: 1088 grains fall at 100 g for a few thousand
+// steps, so contacts form, slide and break, and bodies cross sub-domain faces in every direction.
+#pragma once
+
+namespace tessera::test {
+
+inline const char* kViolentDeposition = R"(
+scene: deposition
+domain: {box_min: [0, 0, 0], box_max: [6 mm, 6 mm, 12 mm]}
+solid:
+  gravity: [0.5, -0.3, -981]
+  steps_per_contact: 20
+  neighbor_skin: 0.15 mm
+  materials: {sand: {density: 2480}, wall: {density: 2480}}
+  contact:
+    law: hooke
+    pairs:
+      - {materials: [sand, sand], normal_stiffness: 2000, tangential_stiffness: 571.4, normal_damping_rate: 5.146e4, tangential_damping_rate: 2.573e4, friction: 0.4}
+      - {materials: [sand, wall], normal_stiffness: 2000, tangential_stiffness: 571.4, normal_damping_rate: 5.146e4, tangential_damping_rate: 2.573e4, friction: 0.4}
+  walls: [{type: box, min: [0, 0, 0], max: [6 mm, 6 mm, 12 mm], material: wall}]
+deposition:
+  material: sand
+  diameter: 0.6 mm
+  lattice_spacing: 0.7 mm
+  jitter: 0.04 mm
+  region_min: [0, 0, 0]
+  region_max: [6 mm, 6 mm, 12 mm]
+  settled_kinetic_energy: 1e-30
+run: {end_time: 1.0, check_interval: 1 ms}
+)";
+
+}  // namespace tessera::test

@@ -1,0 +1,25 @@
+// SPDX-License-Identifier: MIT
+// Running a scene in-process on a sub-communicator and gathering its final body states, for
+// parallel-equivalence and restart tests.
+#pragma once
+#include <mpi.h>
+
+#include <array>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace tessera::test {
+
+// Full packed state (ParticleStore::pack) of every body, by id; filled on world rank 0 only.
+using BodyStates = std::map<long, std::vector<double>>;
+
+// Runs the case text with overrides on the first `ranks` ranks of MPI_COMM_WORLD.
+BodyStates run_scene_on(int ranks, const std::string& yaml, const std::vector<std::string>& sets,
+                        const std::string& output_dir, std::optional<std::string> restart = std::nullopt);
+
+// Number of bodies whose states differ bitwise (missing bodies count too); prints the first few.
+long count_differences(const BodyStates& a, const BodyStates& b, const char* what);
+
+}  // namespace tessera::test

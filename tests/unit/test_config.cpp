@@ -1,0 +1,119 @@
+// SPDX-License-Identifier: MIT
+// Case files: units on entry, defaults, overrides, and errors that name key, value and what is allowed.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <functional>
+
+#include "app/dem_scene.hpp"
+#include "core/config.hpp"
+#include "core/errors.hpp"
+
+namespace tessera {
+namespace {
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Config, UnitsConvertOnEntry) {
+  Config c = Config::parse("a: {d: 0.6 mm, t: 2 ms, e: 70 GPa, rho: 2.48 g/cm^3, plain: 3.5}");
+  const ConfigNode a = c.root().section("a");
+  EXPECT_DOUBLE_EQ(a.real("d", Dim::length, Range::positive()), 6e-4);
+  EXPECT_DOUBLE_EQ(a.real("t", Dim::time, Range::positive()), 2e-3);
+  EXPECT_DOUBLE_EQ(a.real("e", Dim::pressure, Range::positive()), 7e10);
+  EXPECT_DOUBLE_EQ(a.real("rho", Dim::density, Range::positive()), 2480);
+  EXPECT_DOUBLE_EQ(a.real("plain", Dim::length, Range::positive()), 3.5);
+  EXPECT_DOUBLE_EQ(c.resolved()["a"]["d"].as<double>(), 6e-4);  // SI in the resolved case
+}
+
+TEST(Config, WrongUnitNamesKeyValueAndAllowedUnits) {
+  Config c = Config::parse("a: {d: 0.6 kg}");
+  const std::string m = error_of([&] { c.root().section("a").real("d", Dim::length, Range::positive()); });
+  EXPECT_NE(m.find("'a.d'"), std::string::npos) << m;
+  EXPECT_NE(m.find("0.6 kg"), std::string::npos) << m;
+  EXPECT_NE(m.find("mm"), std::string::npos) << m;
+}
+
+TEST(Config, OutOfRangeAndWrongType) {
+  Config c = Config::parse("a: {rho: -5, n: many, law: spring, v: [1, 2]}");
+  const ConfigNode a = c.root().section("a");
+  EXPECT_NE(error_of([&] { a.real("rho", Dim::density, Range::positive()); }).find("> 0"), std::string::npos);
+  EXPECT_NE(error_of([&] { a.integer("n", 0, 10); }).find("an integer in [0, 10]"), std::string::npos);
+  EXPECT_NE(error_of([&] { a.choice("law", {"hooke", "hertz_mindlin"}); }).find("one of hooke, hertz_mindlin"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { a.vec3("v", Dim::length); }).find("a list of 3 numbers"), std::string::npos);
+}
+
+TEST(Config, MissingKeyAndDefaults) {
+  Config c = Config::parse("a: {x: 1}");
+  const ConfigNode a = c.root().section("a");
+  EXPECT_NE(error_of([&] { a.real("y", Dim::none, Range::any()); }).find("is required"), std::string::npos);
+  EXPECT_EQ(a.real("z", Dim::none, Range::any(), 4.0), 4.0);
+  EXPECT_EQ(c.resolved()["a"]["z"].as<double>(), 4.0);
+}
+
+TEST(Config, UnknownKeysAreErrors) {
+  Config c = Config::parse("a: {x: 1, tpyo: 2}\nb: {y: 3}");
+  c.root().section("a").real("x", Dim::none, Range::any());
+  const std::string m = error_of([&] { c.check_unused(); });
+  EXPECT_NE(m.find("a.tpyo"), std::string::npos) << m;
+  EXPECT_NE(m.find("b"), std::string::npos) << m;
+}
+
+TEST(Config, SetOverridesAnyKeyIncludingListItems) {
+  Config c = Config::parse("a: {x: 1, l: [{m: 1}, {m: 2}]}", {"a.x=5", "a.l.1.m=7", "a.new=3 mm"});
+  const ConfigNode a = c.root().section("a");
+  EXPECT_EQ(a.real("x", Dim::none, Range::any()), 5);
+  EXPECT_EQ(a.list("l")[1].real("m", Dim::none, Range::any()), 7);
+  EXPECT_DOUBLE_EQ(a.real("new", Dim::length, Range::any()), 3e-3);
+  EXPECT_NE(error_of([] { Config::parse("a: 1", {"novalue"}); }).find("section.key=value"), std::string::npos);
+}
+
+const char* kDeposition = R"(
+scene: deposition
+domain: {box_min: [0, 0, 0], box_max: [4 mm, 4 mm, 8 mm]}
+solid:
+  materials: {sand: {density: 2480}}
+  contact:
+    law: hooke
+    pairs: [{materials: [sand, sand], normal_stiffness: 2000, restitution: 0.5, friction: 0.3}]
+  walls: [{type: box, min: [0, 0, 0], max: [4 mm, 4 mm, 8 mm], material: sand}]
+deposition:
+  material: sand
+  diameter: 0.6 mm
+  region_min: [0, 0, 0]
+  region_max: [4 mm, 4 mm, 6 mm]
+  settled_kinetic_energy: 1e-10
+run: {end_time: 0.1}
+)";
+
+std::string scene_error(const std::vector<std::string>& sets) {
+  return error_of([&] {
+    Config c = Config::parse(kDeposition, sets);
+    auto s = make_scene(c.root(), MPI_COMM_WORLD, ".");
+    c.check_unused();
+  });
+}
+
+TEST(Config, DepositionCaseIsValid) { EXPECT_EQ(scene_error({}), ""); }
+
+TEST(Config, InconsistentInputIsCaughtBeforeAnyWork) {
+  EXPECT_NE(scene_error({"deposition.region_max=[4 mm, 4 mm, 9 mm]"}).find("deposition.region_max"), std::string::npos);
+  EXPECT_NE(scene_error({"domain.box_max=[4 mm, 0, 8 mm]"}).find("domain.box_max"), std::string::npos);
+  EXPECT_NE(scene_error({"deposition.material=clay"}).find("a material defined in solid.materials (sand)"),
+            std::string::npos);
+  EXPECT_NE(scene_error({"solid.contact.pairs.0.normal_damping=1e-3"}).find("exactly one of"), std::string::npos);
+  EXPECT_NE(scene_error({"scene=tunnel"}).find("one of deposition, bed"), std::string::npos);
+  EXPECT_NE(scene_error({"deposition.lattice_spacing=0.5 mm"}).find("at least the grain diameter"), std::string::npos);
+  EXPECT_NE(scene_error({"solid.walls.0.material=steel"}).find("solid.walls.0.material"), std::string::npos);
+  EXPECT_NE(scene_error({"solid.frobnicate=1"}).find("solid.frobnicate"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace tessera
