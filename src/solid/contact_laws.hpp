@@ -35,55 +35,72 @@ struct PairParams {
   double restitution = 1;                                   // as given or implied (reported)
 };
 
+// Per-pair constants of a law, computed once per neighbour-list build (they depend on the pair's
+// materials, m* and R* only), so that a contact evaluation needs no table look-up, division or
+// square root beyond the geometry's.
+struct ContactCoefficients {
+  double c[5];
+};
+
+// T1: c = {k_n, D_n, k_t, D_t, mu}
 struct LinearSpringDashpot {
   static constexpr const char* name = "hooke";
-  static void evaluate(const PairParams& p, double delta, double vn, double meff, double /*reff*/,
-                       double& fn, double& kt, double& gt) {
+  static ContactCoefficients coefficients(const PairParams& p, double meff, double /*reff*/) {
     const double dn = p.dn_abs + p.dn_rate * meff + 2.0 * p.dn_zeta * std::sqrt(meff * p.normal_stiffness);
-    fn = p.normal_stiffness * delta - dn * vn;
-    kt = p.tangential_stiffness;
-    gt = p.dt_abs + p.dt_rate * meff + 2.0 * p.dt_zeta * std::sqrt(meff * p.tangential_stiffness);
+    const double dt = p.dt_abs + p.dt_rate * meff + 2.0 * p.dt_zeta * std::sqrt(meff * p.tangential_stiffness);
+    return {{p.normal_stiffness, dn, p.tangential_stiffness, dt, p.friction}};
+  }
+  static void evaluate(const double* c, double delta, double vn, double& fn, double& kt, double& gt) {
+    fn = c[0] * delta - c[1] * vn;
+    kt = c[2];
+    gt = c[3];
   }
 };
 
+// T2: c = {K, alpha sqrt(m* K), 8 G* sqrt(R*), alpha sqrt(m* 8 G* sqrt(R*)), mu}, so that
+// F_n = max(0, c0 delta^(3/2) - c1 delta^(1/4) v_n), k_t = c2 delta^(1/2), D_t = c3 delta^(1/4).
 struct HertzMindlin {
   static constexpr const char* name = "hertz_mindlin";
-  static void evaluate(const PairParams& p, double delta, double vn, double meff, double reff,
-                       double& fn, double& kt, double& gt) {
-    const double sqrt_rd = std::sqrt(reff * delta);
+  static ContactCoefficients coefficients(const PairParams& p, double meff, double reff) {
     const double k_hertz = (4.0 / 3.0) * p.e_star * std::sqrt(reff);
-    const double damping = p.hertz_alpha * std::sqrt(meff * k_hertz) * std::sqrt(std::sqrt(delta));
-    fn = std::max(0.0, k_hertz * delta * std::sqrt(delta) - damping * vn);
-    kt = 8.0 * p.g_star * sqrt_rd;
-    gt = p.hertz_alpha * std::sqrt(meff * kt);
+    const double k_mindlin = 8.0 * p.g_star * std::sqrt(reff);
+    return {{k_hertz, p.hertz_alpha * std::sqrt(meff * k_hertz), k_mindlin,
+             p.hertz_alpha * std::sqrt(meff * k_mindlin), p.friction}};
+  }
+  static void evaluate(const double* c, double delta, double vn, double& fn, double& kt, double& gt) {
+    const double sd = std::sqrt(delta), qd = std::sqrt(sd);
+    fn = std::max(0.0, c[0] * delta * sd - c[1] * qd * vn);
+    kt = c[2] * sd;
+    gt = c[3] * qd;
   }
 };
 
-// Force on body a for one touching contact; updates the tangential history in place (T3, T4).
+// Force on body a for one touching contact; updates the tangential spring xi (T3, T4). Written
+// without branches (selects only) so that a loop over contacts vectorises; every lane computes
+// exactly what a scalar call would, so results do not depend on the vector width.
 template <class Law>
-inline Vec3 contact_force(const PairParams& p, double delta, const Vec3& n, const Vec3& v_rel,
-                          double meff, double reff, double dt, double* history) {
+inline Vec3 contact_force(const double* c, double delta, const Vec3& n, const Vec3& v_rel, double dt, Vec3& xi) {
   const double vn = dot(v_rel, n);
   const Vec3 vt = v_rel - n * vn;
   double fn = 0, kt = 0, gt = 0;
-  Law::evaluate(p, delta, vn, meff, reff, fn, kt, gt);
-
-  Vec3 xi = Vec3::load(history);
-  const double xi2 = norm2(xi);
-  if (xi2 > 0.0) {
-    xi -= n * dot(xi, n);
-    const double projected2 = norm2(xi);
-    if (projected2 > 0.0) xi *= std::sqrt(xi2 / projected2);
-  }
-  xi += vt * dt;
+  Law::evaluate(c, delta, vn, fn, kt, gt);
+  // Rotate the spring onto the tangent plane and restore its length: factor sqrt(1 + t),
+  // t = xn^2 / |xi_projected|^2. The normal turns little in one step (t ~ (w dt)^2), where the
+  // series to t^2 is exact to round-off (error < t^3 / 16).
+  const double xn = dot(xi, n);
+  const Vec3 projected = xi - n * xn;
+  const double p2 = norm2(projected);
+  const double t = xn * xn / (p2 > 0.0 ? p2 : 1.0);
+  const double factor = t < 1e-6 ? 1.0 + t * (0.5 - 0.125 * t) : std::sqrt(1.0 + t);
+  xi = projected * factor + vt * dt;
   Vec3 ft = -(xi * kt + vt * gt);
-  const double limit = p.friction * std::fabs(fn);
+  const double limit = c[4] * std::fabs(fn);
   const double ft2 = norm2(ft);
-  if (ft2 > limit * limit) {
-    ft *= limit / std::sqrt(ft2);
-    xi = kt > 0.0 ? ft * (-1.0 / kt) : Vec3{};
-  }
-  xi.store(history);
+  const bool slide = ft2 > limit * limit;
+  const double scale = slide ? limit / std::sqrt(ft2 > 0.0 ? ft2 : 1.0) : 1.0;
+  ft *= scale;
+  const double inv_kt = kt > 0.0 ? -1.0 / kt : 0.0;
+  xi = Vec3{slide ? ft.x * inv_kt : xi.x, slide ? ft.y * inv_kt : xi.y, slide ? ft.z * inv_kt : xi.z};
   return n * fn + ft;
 }
 

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "core/errors.hpp"
+#include "solid/contact_kernel.hpp"
 
 namespace tessera {
 
@@ -128,7 +129,29 @@ void DemSolver::rebuild() {
   {
     auto t = timers_.scope("neighbor");
     list_.build(p_, skin_, histories);
+    if (model_.law() == LawKind::linear_spring_dashpot) fill_pair_coefficients<LinearSpringDashpot>();
+    else fill_pair_coefficients<HertzMindlin>();
+    touching_before_.clear();
+    for (std::size_t k = 0; k < list_.size(); ++k)
+      if (list_.history[3 * k] != 0.0 || list_.history[3 * k + 1] != 0.0 || list_.history[3 * k + 2] != 0.0)
+        touching_before_.push_back(static_cast<std::int32_t>(k));
     x_build_.assign(p_.x.begin(), p_.x.begin() + 3 * static_cast<std::ptrdiff_t>(p_.owned));
+    inv_mass_.resize(p_.owned);
+    inv_inertia_.resize(p_.owned);
+    wall_body_.clear();
+    wall_slot_.clear();
+    const auto& prims = walls_.primitives();
+    for (std::size_t i = 0; i < p_.owned; ++i) {
+      inv_mass_[i] = 1.0 / p_.mass[i];
+      inv_inertia_[i] = 1.0 / p_.inertia[i];
+      for (std::size_t s = 0; s < prims.size(); ++s) {
+        Vec3 n;
+        if (prims[s].overlap(p_.pos(i), p_.radius[i] + skin_, n) > 0.0) {
+          wall_body_.push_back(static_cast<std::int32_t>(i));
+          wall_slot_.push_back(static_cast<std::int32_t>(s));
+        }
+      }
+    }
   }
 }
 
@@ -149,7 +172,7 @@ void DemSolver::integrate_first() {
   const double h = 0.5 * dt_;
   const Vec3 g = settings_.gravity;
   for (std::size_t i = 0; i < p_.owned; ++i) {
-    const double inv_m = 1.0 / p_.mass[i], inv_i = 1.0 / p_.inertia[i];
+    const double inv_m = inv_mass_[i], inv_i = inv_inertia_[i];
     double* v = &p_.v[3 * i];
     double* w = &p_.omega[3 * i];
     double* x = &p_.x[3 * i];
@@ -160,15 +183,16 @@ void DemSolver::integrate_first() {
       w[k] += h * t[k] * inv_i;
       x[k] += dt_ * v[k];
     }
-    // Orientation: q <- normalize(q + dt/2 (0, w) q), first order; spheres need it for output only.
+    // Orientation: q <- normalize(q + dt/2 (0, w) q). The update changes |q|^2 by O((w dt)^2), so
+    // one Newton step of 1/sqrt about 1 normalises to round-off without a square root.
     double* q = &p_.q[4 * i];
     const double qw = q[0], qx = q[1], qy = q[2], qz = q[3];
     q[0] = qw + h * (-w[0] * qx - w[1] * qy - w[2] * qz);
     q[1] = qx + h * (w[0] * qw + w[1] * qz - w[2] * qy);
     q[2] = qy + h * (w[1] * qw + w[2] * qx - w[0] * qz);
     q[3] = qz + h * (w[2] * qw + w[0] * qy - w[1] * qx);
-    const double inv_norm = 1.0 / std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    for (int k = 0; k < 4; ++k) q[k] *= inv_norm;
+    const double scale = 0.5 * (3.0 - (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]));
+    for (int k = 0; k < 4; ++k) q[k] *= scale;
   }
 }
 
@@ -176,7 +200,7 @@ void DemSolver::integrate_second() {
   const double h = 0.5 * dt_;
   const Vec3 g = settings_.gravity;
   for (std::size_t i = 0; i < p_.owned; ++i) {
-    const double inv_m = 1.0 / p_.mass[i], inv_i = 1.0 / p_.inertia[i];
+    const double inv_m = inv_mass_[i], inv_i = inv_inertia_[i];
     for (int k = 0; k < 3; ++k) {
       p_.v[3 * i + k] += h * (p_.f[3 * i + k] * inv_m + g[k]);
       p_.omega[3 * i + k] += h * p_.torque[3 * i + k] * inv_i;
@@ -185,11 +209,99 @@ void DemSolver::integrate_second() {
 }
 
 template <class Law>
+void DemSolver::fill_pair_coefficients() {
+  pair_coefficients_.resize(list_.size());
+  for (std::size_t k = 0; k < list_.size(); ++k) {
+    const std::size_t a = list_.first[k], b = list_.second[k];
+    const double ra = p_.radius[a], rb = p_.radius[b];
+    pair_coefficients_[k] = Law::coefficients(model_.pair(p_.material[a], p_.material[b]), list_.meff[k], ra * rb / (ra + rb));
+  }
+}
+
+template <class Law>
 void DemSolver::compute_forces_with(bool update_history) {
   const std::size_t n = p_.size();
-  std::fill(p_.f.begin(), p_.f.begin() + 3 * static_cast<std::ptrdiff_t>(n), 0.0);
-  std::fill(p_.torque.begin(), p_.torque.begin() + 3 * static_cast<std::ptrdiff_t>(n), 0.0);
   const double dt = update_history ? dt_ : 0.0;
+  const std::size_t np = list_.size();
+  const std::int32_t* first = list_.first.data();
+  const std::int32_t* second = list_.second.data();
+  double* hist = list_.history.data();
+  {
+    auto t = timers_.scope("contact_forces");
+    k_geometry_.resize(n);
+    k_motion_.resize(n);
+    k_force_.assign(n, KernelForce{0, 0, 0, 0, 0, 0});
+    for (std::size_t i = 0; i < n; ++i) {
+      const double* x = &p_.x[3 * i];
+      const double* v = &p_.v[3 * i];
+      const double* w = &p_.omega[3 * i];
+      k_geometry_[i] = {x[0], x[1], x[2], p_.radius[i]};
+      k_motion_[i] = {v[0], v[1], v[2], w[0], w[1], w[2], p_.material[i]};
+    }
+    const KernelGeometry* g = k_geometry_.data();
+    const KernelMotion* m = k_motion_.data();
+    KernelForce* out = k_force_.data();
+    // Pass 1, branch-free: which listed pairs touch (about half of them in a dense bed, at random,
+    // which a branch would mispredict). The compacted list keeps the canonical order.
+    touching_.resize(np);
+    std::size_t nt = 0;
+    for (std::size_t k = 0; k < np; ++k) {
+      const KernelGeometry& a = g[first[k]];
+      const KernelGeometry& b = g[second[k]];
+      const double dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z, rsum = a.r + b.r;
+      touching_[nt] = static_cast<std::int32_t>(k);
+      nt += (dx * dx + dy * dy + dz * dz < rsum * rsum) ? 1 : 0;
+    }
+    touching_.resize(nt);
+    // Contacts that opened since the last evaluation lose their history (T3).
+    if (update_history) {
+      auto it = touching_.begin();
+      for (const auto k : touching_before_) {
+        while (it != touching_.end() && *it < k) ++it;
+        if (it == touching_.end() || *it != k) hist[3 * k] = hist[3 * k + 1] = hist[3 * k + 2] = 0.0;
+      }
+    }
+    // Pass 2, in blocks: gather the pairs' data into lanes, evaluate the law on all lanes
+    // (vectorised, contact_kernel.cpp), then accumulate forces in canonical order.
+    constexpr std::size_t B = ContactLanes::width;
+    ContactLanes& L = lanes_;
+    const ContactCoefficients* pc = pair_coefficients_.data();
+    for (std::size_t s = 0; s < nt; s += B) {
+      const std::size_t nb = std::min(B, nt - s);
+      for (std::size_t j = 0; j < nb; ++j) {
+        const std::size_t k = static_cast<std::size_t>(touching_[s + j]);
+        const std::size_t a = first[k], b = second[k];
+        const KernelGeometry &ga = g[a], &gb = g[b];
+        const KernelMotion &ma = m[a], &mb = m[b];
+        L.dx[j] = ga.x - gb.x, L.dy[j] = ga.y - gb.y, L.dz[j] = ga.z - gb.z;
+        L.ra[j] = ga.r, L.rb[j] = gb.r;
+        L.vx[j] = ma.vx - mb.vx, L.vy[j] = ma.vy - mb.vy, L.vz[j] = ma.vz - mb.vz;
+        L.wx[j] = ma.wx * ga.r + mb.wx * gb.r;
+        L.wy[j] = ma.wy * ga.r + mb.wy * gb.r;
+        L.wz[j] = ma.wz * ga.r + mb.wz * gb.r;
+        L.hx[j] = hist[3 * k], L.hy[j] = hist[3 * k + 1], L.hz[j] = hist[3 * k + 2];
+        for (int c = 0; c < 5; ++c) L.coef[c][j] = pc[k].c[c];
+      }
+      evaluate_contacts(model_.law(), L, nb, dt);
+      for (std::size_t j = 0; j < nb; ++j) {
+        const std::size_t k = static_cast<std::size_t>(touching_[s + j]);
+        hist[3 * k] = L.hx[j], hist[3 * k + 1] = L.hy[j], hist[3 * k + 2] = L.hz[j];
+        KernelForce &fa = out[first[k]], &fb = out[second[k]];
+        fa.fx += L.fx[j], fa.fy += L.fy[j], fa.fz += L.fz[j];
+        fb.fx -= L.fx[j], fb.fy -= L.fy[j], fb.fz -= L.fz[j];
+        fa.tx -= L.nx[j] * L.ra[j], fa.ty -= L.ny[j] * L.ra[j], fa.tz -= L.nz[j] * L.ra[j];
+        fb.tx -= L.nx[j] * L.rb[j], fb.ty -= L.ny[j] * L.rb[j], fb.tz -= L.nz[j] * L.rb[j];
+      }
+    }
+    if (update_history) touching_before_.swap(touching_);
+    for (std::size_t i = 0; i < p_.owned; ++i) {
+      const KernelForce& fo = out[i];
+      double* f = &p_.f[3 * i];
+      double* tq = &p_.torque[3 * i];
+      f[0] = fo.fx, f[1] = fo.fy, f[2] = fo.fz;
+      tq[0] = fo.tx, tq[1] = fo.ty, tq[2] = fo.tz;
+    }
+  }
   const double* x = p_.x.data();
   const double* v = p_.v.data();
   const double* w = p_.omega.data();
@@ -198,44 +310,16 @@ void DemSolver::compute_forces_with(bool update_history) {
   const std::int32_t* mat = p_.material.data();
   double* f = p_.f.data();
   double* tq = p_.torque.data();
-  const std::size_t np = list_.size();
-  const std::int32_t* first = list_.first.data();
-  const std::int32_t* second = list_.second.data();
-  double* hist = list_.history.data();
-  {
-    auto t = timers_.scope("contact_forces");
-    for (std::size_t k = 0; k < np; ++k) {
-      const std::size_t a = first[k], b = second[k];
-      const Vec3 d = Vec3::load(x + 3 * a) - Vec3::load(x + 3 * b);
-      const double r2 = norm2(d);
-      const double ra = rad[a], rb = rad[b], rsum = ra + rb;
-      double* h = hist + 3 * k;
-      if (r2 >= rsum * rsum) {
-        h[0] = h[1] = h[2] = 0.0;
-        continue;
-      }
-      const double r = std::sqrt(r2);
-      const Vec3 nrm = d * (1.0 / r);
-      const Vec3 v_rel = Vec3::load(v + 3 * a) - Vec3::load(v + 3 * b) -
-                         cross(Vec3::load(w + 3 * a) * ra + Vec3::load(w + 3 * b) * rb, nrm);
-      const double ma = mass[a], mb = mass[b];
-      const Vec3 force = contact_force<Law>(model_.pair(mat[a], mat[b]), rsum - r, nrm, v_rel,
-                                            ma * mb / (ma + mb), ra * rb / rsum, dt, h);
-      force.add_to(f + 3 * a);
-      force.subtract_from(f + 3 * b);
-      const Vec3 nf = cross(nrm, force);
-      (nf * ra).subtract_from(tq + 3 * a);
-      (nf * rb).subtract_from(tq + 3 * b);
-    }
-  }
   auto t = timers_.scope("wall_forces");
   const auto& prims = walls_.primitives();
   const int slots = walls_.slots();
   for (auto& wf : wall_force_) wf = Vec3{};
-  for (std::size_t i = 0; i < p_.owned; ++i) {
+  for (std::size_t k = 0; k < wall_body_.size(); ++k) {
+    const std::size_t i = wall_body_[k];
+    const int s = wall_slot_[k];
     const Vec3 xi = Vec3::load(x + 3 * i);
     const double ri = rad[i];
-    for (int s = 0; s < slots; ++s) {
+    {
       double* h = &p_.wall_history[3 * (i * slots + s)];
       Vec3 nrm;
       const double delta = prims[s].overlap(xi, ri, nrm);
@@ -244,8 +328,10 @@ void DemSolver::compute_forces_with(bool update_history) {
         continue;
       }
       const Vec3 v_rel = Vec3::load(v + 3 * i) - cross(Vec3::load(w + 3 * i) * ri, nrm);
-      const Vec3 force = contact_force<Law>(model_.pair(mat[i], prims[s].material), delta, nrm, v_rel,
-                                            mass[i], ri, dt, h);
+      const ContactCoefficients c = Law::coefficients(model_.pair(mat[i], prims[s].material), mass[i], ri);
+      Vec3 xi = Vec3::load(h);
+      const Vec3 force = contact_force<Law>(c.c, delta, nrm, v_rel, dt, xi);
+      xi.store(h);
       force.add_to(f + 3 * i);
       (cross(nrm, force) * ri).subtract_from(tq + 3 * i);
       wall_force_[s] -= force;

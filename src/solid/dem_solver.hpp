@@ -20,6 +20,7 @@
 #include "core/decomposition.hpp"
 #include "core/timers.hpp"
 #include "solid/contact_history.hpp"
+#include "solid/contact_kernel.hpp"
 #include "solid/contact_model.hpp"
 #include "solid/halo.hpp"
 #include "solid/neighbor_list.hpp"
@@ -91,6 +92,8 @@ class DemSolver {
   void compute_forces(bool update_history);
   template <class Law>
   void compute_forces_with(bool update_history);
+  template <class Law>
+  void fill_pair_coefficients();
   void integrate_first();
   void integrate_second();
   void sort_owned_by_id();
@@ -105,6 +108,29 @@ class DemSolver {
   HistoryMap pending_;
   PhaseTimers timers_;
   std::vector<double> x_build_;
+  std::vector<double> inv_mass_, inv_inertia_;  // owned bodies, refreshed at each rebuild
+  // (body, wall slot) pairs within reach of a wall at the last rebuild: no other body can touch a
+  // wall before the next one (static walls; bodies move less than skin/2 in between).
+  std::vector<std::int32_t> wall_body_, wall_slot_;
+  // Kernel mirrors of the body arrays, one cache line or half of one per body, packed each step:
+  // a contact then touches 3 lines per partner instead of 7-8 scattered arrays.
+  struct alignas(32) KernelGeometry {
+    double x, y, z, r;
+  };
+  struct alignas(64) KernelMotion {
+    double vx, vy, vz, wx, wy, wz;
+    std::int64_t material;
+  };
+  struct alignas(64) KernelForce {
+    double fx, fy, fz, tx, ty, tz;
+  };
+  std::vector<KernelGeometry> k_geometry_;
+  std::vector<KernelMotion> k_motion_;
+  std::vector<KernelForce> k_force_;
+  std::vector<ContactCoefficients> pair_coefficients_;
+  ContactLanes lanes_;  // per listed pair, from the law
+  // Listed pairs touching now and at the previous force evaluation (ascending list indices).
+  std::vector<std::int32_t> touching_, touching_before_;
   std::vector<Vec3> wall_force_;
   double dt_ = 0, time_ = 0, skin_ = 0, r_max_ = 0, t_contact_ = 0;
   long steps_ = 0;

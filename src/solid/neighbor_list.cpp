@@ -11,7 +11,7 @@ void NeighborList::build(const ParticleStore& p, double skin, const HistoryMap& 
   ++builds;
   const std::size_t n = p.size();
   candidates_.clear();
-  first.clear(), second.clear(), keys.clear(), history.clear();
+  first.clear(), second.clear(), keys.clear(), history.clear(), meff.clear();
   if (n == 0) return;
 
   double r_min = std::numeric_limits<double>::infinity(), r_max = 0;
@@ -116,11 +116,13 @@ void NeighborList::build(const ParticleStore& p, double skin, const HistoryMap& 
   std::sort(candidates_.begin(), candidates_.end(),
             [](const Candidate& l, const Candidate& r) { return l.key < r.key; });
   const std::size_t np = candidates_.size();
-  first.resize(np), second.resize(np), keys.resize(np), history.assign(3 * np, 0.0);
+  first.resize(np), second.resize(np), keys.resize(np), history.assign(3 * np, 0.0), meff.resize(np);
   for (std::size_t k = 0; k < np; ++k) {
     first[k] = candidates_[k].a;
     second[k] = candidates_[k].b;
     keys[k] = candidates_[k].key;
+    const double ma = p.mass[first[k]], mb = p.mass[second[k]];
+    meff[k] = ma * mb / (ma + mb);
     if (!histories.empty()) {
       const auto it = histories.find(keys[k]);
       if (it != histories.end())

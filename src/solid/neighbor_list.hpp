@@ -33,6 +33,7 @@ class NeighborList {
   std::vector<std::int32_t> first, second;  // local indices; id[first] < id[second]
   std::vector<PairKey> keys;
   std::vector<double> history;              // 3 per pair (xi of eq. 5)
+  std::vector<double> meff;                 // m_a m_b / (m_a + m_b), constant while listed
 
   std::size_t builds = 0;
 

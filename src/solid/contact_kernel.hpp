@@ -1,0 +1,28 @@
+// SPDX-License-Identifier: MIT
+// The contact law evaluated on a block of contacts laid out in lanes (structure of arrays): the
+// gather and the in-order force accumulation stay in the solver; this loop vectorises. It is
+// compiled for AVX-512, AVX2 and the baseline ISA and chosen at run time (GCC target_clones).
+// With -ffp-contract=off every clone performs the same IEEE operations in the same order, so the
+// results are bitwise identical whatever the machine: rank-count independence holds on mixed
+// clusters too.
+#pragma once
+#include <cstddef>
+
+#include "solid/contact_model.hpp"
+
+namespace tessera {
+
+struct ContactLanes {
+  static constexpr std::size_t width = 32;
+  // in: centre difference a - b, radii, relative velocity v_a - v_b, R_a w_a + R_b w_b, spring xi,
+  //     law coefficients; out: force on a, n x force, updated xi.
+  alignas(64) double dx[width], dy[width], dz[width], ra[width], rb[width];
+  alignas(64) double vx[width], vy[width], vz[width], wx[width], wy[width], wz[width];
+  alignas(64) double hx[width], hy[width], hz[width];
+  alignas(64) double coef[5][width];
+  alignas(64) double fx[width], fy[width], fz[width], nx[width], ny[width], nz[width];
+};
+
+void evaluate_contacts(LawKind law, ContactLanes& lanes, std::size_t count, double dt);
+
+}  // namespace tessera
