@@ -2,6 +2,8 @@
 #include "solid/dem_solver.hpp"
 
 #include <algorithm>
+#include <bit>
+#include <unordered_map>
 #include <cmath>
 #include <numbers>
 #include <numeric>
@@ -210,11 +212,28 @@ void DemSolver::integrate_second() {
 
 template <class Law>
 void DemSolver::fill_pair_coefficients() {
-  pair_coefficients_.resize(list_.size());
+  struct Key {
+    std::int32_t ma, mb;
+    double meff, reff;
+    bool operator==(const Key& o) const { return ma == o.ma && mb == o.mb && meff == o.meff && reff == o.reff; }
+  };
+  struct KeyHash {
+    std::size_t operator()(const Key& k) const {
+      std::uint64_t h = std::bit_cast<std::uint64_t>(k.meff) * 0x9E3779B97F4A7C15ULL;
+      h ^= std::bit_cast<std::uint64_t>(k.reff) + 0x94D049BB133111EBULL + (h << 6) + (h >> 2);
+      return h ^ (static_cast<std::uint64_t>(k.ma) << 32 | static_cast<std::uint32_t>(k.mb));
+    }
+  };
+  std::unordered_map<Key, std::int32_t, KeyHash> index;
+  coefficient_sets_.clear();
+  pair_coefficient_.resize(list_.size());
   for (std::size_t k = 0; k < list_.size(); ++k) {
     const std::size_t a = list_.first[k], b = list_.second[k];
     const double ra = p_.radius[a], rb = p_.radius[b];
-    pair_coefficients_[k] = Law::coefficients(model_.pair(p_.material[a], p_.material[b]), list_.meff[k], ra * rb / (ra + rb));
+    const Key key{p_.material[a], p_.material[b], list_.meff[k], ra * rb / (ra + rb)};
+    const auto [it, added] = index.emplace(key, static_cast<std::int32_t>(coefficient_sets_.size()));
+    if (added) coefficient_sets_.push_back(Law::coefficients(model_.pair(key.ma, key.mb), key.meff, key.reff));
+    pair_coefficient_[k] = it->second;
   }
 }
 
@@ -245,7 +264,9 @@ void DemSolver::compute_forces_with(bool update_history) {
     // which a branch would mispredict). The compacted list keeps the canonical order.
     touching_.resize(np);
     std::size_t nt = 0;
+    constexpr std::size_t ahead = 16;  // prefetch distance: partners are scattered over ~1000 bodies
     for (std::size_t k = 0; k < np; ++k) {
+      if (k + ahead < np) __builtin_prefetch(&g[second[k + ahead]]);
       const KernelGeometry& a = g[first[k]];
       const KernelGeometry& b = g[second[k]];
       const double dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z, rsum = a.r + b.r;
@@ -265,10 +286,17 @@ void DemSolver::compute_forces_with(bool update_history) {
     // (vectorised, contact_kernel.cpp), then accumulate forces in canonical order.
     constexpr std::size_t B = ContactLanes::width;
     ContactLanes& L = lanes_;
-    const ContactCoefficients* pc = pair_coefficients_.data();
+    const ContactCoefficients* sets = coefficient_sets_.data();
+    const std::int32_t* pc = pair_coefficient_.data();
     for (std::size_t s = 0; s < nt; s += B) {
       const std::size_t nb = std::min(B, nt - s);
       for (std::size_t j = 0; j < nb; ++j) {
+        if (s + j + ahead < nt) {
+          const std::size_t kk = static_cast<std::size_t>(touching_[s + j + ahead]);
+          __builtin_prefetch(&m[second[kk]]);
+          __builtin_prefetch(&out[second[kk]], 1);
+          __builtin_prefetch(&hist[3 * kk], 1);
+        }
         const std::size_t k = static_cast<std::size_t>(touching_[s + j]);
         const std::size_t a = first[k], b = second[k];
         const KernelGeometry &ga = g[a], &gb = g[b];
@@ -280,7 +308,8 @@ void DemSolver::compute_forces_with(bool update_history) {
         L.wy[j] = ma.wy * ga.r + mb.wy * gb.r;
         L.wz[j] = ma.wz * ga.r + mb.wz * gb.r;
         L.hx[j] = hist[3 * k], L.hy[j] = hist[3 * k + 1], L.hz[j] = hist[3 * k + 2];
-        for (int c = 0; c < 5; ++c) L.coef[c][j] = pc[k].c[c];
+        const ContactCoefficients& cs = sets[pc[k]];
+        for (int c = 0; c < 5; ++c) L.coef[c][j] = cs.c[c];
       }
       evaluate_contacts(model_.law(), L, nb, dt);
       for (std::size_t j = 0; j < nb; ++j) {

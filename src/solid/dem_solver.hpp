@@ -127,8 +127,11 @@ class DemSolver {
   std::vector<KernelGeometry> k_geometry_;
   std::vector<KernelMotion> k_motion_;
   std::vector<KernelForce> k_force_;
-  std::vector<ContactCoefficients> pair_coefficients_;
-  ContactLanes lanes_;  // per listed pair, from the law
+  // Law coefficients: a table of the distinct sets (one per material pair for equal bodies) and,
+  // per listed pair, an index into it: 4 bytes per pair to stream instead of 40.
+  std::vector<ContactCoefficients> coefficient_sets_;
+  std::vector<std::int32_t> pair_coefficient_;
+  ContactLanes lanes_;
   // Listed pairs touching now and at the previous force evaluation (ascending list indices).
   std::vector<std::int32_t> touching_, touching_before_;
   std::vector<Vec3> wall_force_;
