@@ -1,0 +1,31 @@
+// SPDX-License-Identifier: MIT
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "mpi/deposition_case.hpp"
+#include "support/scene_runs.hpp"
+
+namespace tessera::test {
+namespace {
+
+// Checkpoints do not depend on the rank count: a run checkpointed on N ranks continues on 1 rank to
+// the same bits as a straight run (results being rank-count independent, see test_rank_independence).
+TEST(Restart, ContinuesOnAnotherRankCount) {
+  int size = 1, rank = 0;
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  ASSERT_GT(size, 1) << "run under mpirun -n 2 or more";
+  const std::string dir = (std::filesystem::temp_directory_path() / "tessera_restart_across").string();
+  const BodyStates straight = run_scene_on(1, kViolentDeposition, {"run.max_steps=1600"}, dir + "/straight");
+  run_scene_on(size, kViolentDeposition, {"run.max_steps=700"}, dir + "/first");
+  const BodyStates resumed = run_scene_on(1, kViolentDeposition, {"run.max_steps=1600"}, dir + "/second",
+                                          dir + "/first/checkpoint.h5");
+  if (rank == 0) {
+    EXPECT_EQ(straight.size(), 1088u);
+    EXPECT_EQ(count_differences(straight, resumed, "restart on 1 rank"), 0);
+  }
+}
+
+}  // namespace
+}  // namespace tessera::test
