@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <sstream>
 
 #include "app/signals.hpp"
 #include "core/errors.hpp"
@@ -35,6 +36,7 @@ DemScene::DemScene(const ConfigNode& root, MPI_Comm comm, const std::string& cas
   if (run.has("end_time")) end_time_ = run.real("end_time", Dim::time, Range::positive());
   if (run.has("max_steps")) max_steps_ = run.integer("max_steps", 1, 1L << 50);
   check_interval_ = run.real("check_interval", Dim::time, Range::positive(), 1e-3);
+  max_overlap_ratio_ = run.real("max_overlap_ratio", Dim::none, Range{0.0, 2.0, true, false}, max_overlap_ratio_);
 
   if (const auto out = root.optional_section("output")) {
     snapshot_interval_ = out->real("snapshot_interval", Dim::time, Range::non_negative(), 0.0);
@@ -57,6 +59,22 @@ void DemScene::require_pairs(const std::vector<int>& mats) const {
                          "needs an entry for materials [" + model.materials()[a].name + ", " +
                              model.materials()[b].name + "]");
   dem_->walls().check_pairs(model, mats);
+}
+
+void DemScene::check_health(const DemStats& s, const RunOptions& opt) {
+  if (s.finite && s.max_overlap_ratio <= max_overlap_ratio_) return;
+  write_checkpoint(opt.output_dir + "/failure.h5", *dem_, extras());
+  std::ostringstream m;
+  m << "blow-up at step " << dem_->steps() << ", t = " << dem_->time() << " s: ";
+  if (!s.finite) m << "non-finite body positions or velocities";
+  else
+    m << "overlap of body " << s.max_overlap_body << " reached " << s.max_overlap_ratio
+      << " of its radius (run.max_overlap_ratio = " << max_overlap_ratio_ << ")";
+  m << ". The contacts are too soft for the impact speeds, or the time step (" << dem_->dt()
+    << " s) is too large for the contact duration (" << dem_->contact_duration()
+    << " s): stiffen the contacts or raise solid.steps_per_contact. Failing state: " << opt.output_dir
+    << "/failure.h5; last good state: the latest " << opt.output_dir << "/checkpoint.h5, if any.";
+  throw CollectiveRunError(m.str());
 }
 
 nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolved_case) {
@@ -83,6 +101,9 @@ nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolv
                 stats.bodies, decomp_->size(), g[0], g[1], g[2], dem_->model().law_name());
     std::printf("  dt %.4g s (contact duration %.4g s), skin %.4g m\n", dem_->dt(), dem_->contact_duration(),
                 dem_->skin());
+    if (dem_->dt() > 0.1 * dem_->contact_duration())
+      std::printf("  warning: dt is %.2g of the contact duration; contacts are resolved with fewer than 10 steps\n",
+                  dem_->dt() / dem_->contact_duration());
     std::fflush(stdout);
   }
 
@@ -104,6 +125,7 @@ nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolv
     if (dem_->time() >= next_check - 0.5 * dem_->dt()) {
       next_check += check_interval_;
       stats = dem_->stats();
+      check_health(stats, opt);
       if (finished(stats)) break;
     }
     if (dem_->time() >= next_snapshot - 0.5 * dem_->dt()) {

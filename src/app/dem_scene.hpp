@@ -48,6 +48,9 @@ class DemScene {
   virtual void restore(const CheckpointExtras& e) { (void)e; }
 
   std::string resolve_path(const std::string& p) const;
+  // Collective: stops the run with a message and a dump of the failing state when the state is not
+  // finite or an overlap exceeds the bound (the last periodic checkpoint is the last good state).
+  void check_health(const DemStats& s, const RunOptions& opt);
   // Every pair among these body materials, and with every wall, must have contact parameters:
   // checked at set-up, before any output.
   void require_pairs(const std::vector<int>& body_materials) const;
@@ -57,6 +60,7 @@ class DemScene {
   std::optional<double> end_time_;
   std::optional<long> max_steps_;
   double check_interval_ = 0;
+  double max_overlap_ratio_ = 0.5;  // blow-up bound, checked every check_interval
   double snapshot_interval_ = 0, checkpoint_interval_ = 0, progress_interval_ = 10;
   std::string case_dir_;
 };

@@ -3,6 +3,8 @@
 //
 //   tessera run CASE.yaml [--set section.key=value ...] [--output DIR] [--restart CHECKPOINT] [--quiet]
 //   tessera info
+// Exit codes: 0 done, 2 bad input (nothing written), 3 interrupted by a signal (checkpoint written),
+// 4 blow-up (failure.h5 written), 1 other failure (MPI_Abort).
 //
 // Sample run: mpirun -n 2 build/bin/tessera run cases/deposition/small.yaml --output runs/dep
 // Afterwards: DIR/summary.json (quantities, timers, resolved case), DIR/snapshots/particles.xmf
@@ -120,6 +122,10 @@ int main(int argc, char** argv) {
     // Input is read identically on every rank, so every rank throws: report once, exit cleanly.
     if (rank == 0) std::fprintf(stderr, "tessera: %s\n", e.what());
     code = 2;
+  } catch (const CollectiveRunError& e) {
+    // Every rank decided this together (global reductions): report once, exit cleanly.
+    if (rank == 0) std::fprintf(stderr, "tessera: %s\n", e.what());
+    code = 4;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "tessera (rank %d): %s\n", rank, e.what());
     MPI_Abort(MPI_COMM_WORLD, 1);

@@ -29,4 +29,11 @@ class RunError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// A RunError every rank reaches together (decided from global reductions): the app reports it once
+// and exits cleanly instead of aborting the MPI job.
+class CollectiveRunError : public RunError {
+ public:
+  using RunError::RunError;
+};
+
 }  // namespace tessera

@@ -400,9 +400,17 @@ void DemSolver::step() {
 
 DemStats DemSolver::stats() const {
   double e[3] = {0, 0, 0};
-  long c[3] = {static_cast<long>(p_.owned), 0, 0};
+  long c[4] = {static_cast<long>(p_.owned), 0, 0, 0};  // bodies, contacts, wall contacts, non-finite
+  struct {
+    double ratio;
+    int body;
+  } worst{0.0, -1};
+  auto note_overlap = [&](double overlap, double radius, std::int64_t id) {
+    if (overlap / radius > worst.ratio) worst = {overlap / radius, static_cast<int>(id)};
+  };
   for (std::size_t i = 0; i < p_.owned; ++i) {
-    const Vec3 v = p_.vel(i), w = p_.ang(i);
+    const Vec3 x = p_.pos(i), v = p_.vel(i), w = p_.ang(i);
+    if (!std::isfinite(norm2(x) + norm2(v) + norm2(w))) ++c[3];
     e[0] += 0.5 * p_.mass[i] * norm2(v);
     e[1] += 0.5 * p_.inertia[i] * norm2(w);
     e[2] = std::max(e[2], norm(v));
@@ -410,25 +418,37 @@ DemStats DemSolver::stats() const {
   for (std::size_t k = 0; k < list_.size(); ++k) {
     const auto a = static_cast<std::size_t>(list_.first[k]), b = static_cast<std::size_t>(list_.second[k]);
     if (a >= p_.owned) continue;  // counted by the owner of the lower-id body
-    const double r2 = norm2(p_.pos(a) - p_.pos(b)), rs = p_.radius[a] + p_.radius[b];
-    if (r2 < rs * rs) ++c[1];
+    const double r = norm(p_.pos(a) - p_.pos(b)), rs = p_.radius[a] + p_.radius[b];
+    if (r < rs) {
+      ++c[1];
+      note_overlap(rs - r, std::min(p_.radius[a], p_.radius[b]), p_.id[a]);
+    }
   }
   for (std::size_t i = 0; i < p_.owned; ++i)
     for (const auto& w : walls_.primitives()) {
       Vec3 n;
-      if (w.overlap(p_.pos(i), p_.radius[i], n) > 0) ++c[2];
+      const double overlap = w.overlap(p_.pos(i), p_.radius[i], n);
+      if (overlap > 0) {
+        ++c[2];
+        note_overlap(overlap, p_.radius[i], p_.id[i]);
+      }
     }
   MPI_Comm comm = decomp_.comm();
   MPI_Allreduce(MPI_IN_PLACE, e, 2, MPI_DOUBLE, MPI_SUM, comm);
   MPI_Allreduce(MPI_IN_PLACE, &e[2], 1, MPI_DOUBLE, MPI_MAX, comm);
-  MPI_Allreduce(MPI_IN_PLACE, c, 3, MPI_LONG, MPI_SUM, comm);
+  MPI_Allreduce(MPI_IN_PLACE, c, 4, MPI_LONG, MPI_SUM, comm);
+  if (!std::isfinite(worst.ratio)) worst.ratio = 1e300;
+  MPI_Allreduce(MPI_IN_PLACE, &worst, 1, MPI_DOUBLE_INT, MPI_MAXLOC, comm);
   DemStats s;
   s.bodies = c[0];
   s.contacts = c[1];
   s.wall_contacts = c[2];
+  s.finite = c[3] == 0;
   s.kinetic_translational = e[0];
   s.kinetic_rotational = e[1];
   s.max_speed = e[2];
+  s.max_overlap_ratio = worst.ratio;
+  s.max_overlap_body = worst.body;
   return s;
 }
 

@@ -45,6 +45,9 @@ struct DemStats {
   double max_speed = 0;
   long contacts = 0;       // touching body-body pairs
   long wall_contacts = 0;  // touching body-wall pairs
+  double max_overlap_ratio = 0;  // largest overlap over the smaller radius (walls: the body's)
+  std::int64_t max_overlap_body = -1;
+  bool finite = true;            // every position and velocity finite
 };
 
 class DemSolver {

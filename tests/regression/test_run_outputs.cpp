@@ -4,10 +4,7 @@
 // "interrupted" summary and exit code 3.
 #include <gtest/gtest.h>
 #include <mpi.h>
-#include <sys/wait.h>
 
-#include <array>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -16,31 +13,17 @@
 #include <string>
 
 #include "core/h5_file.hpp"
+#include "support/run_command.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-  int code;
-  std::string output;
-};
-
-Result shell(const std::string& script) {
-  const std::string cmd = "env -i PATH=/usr/bin:/bin OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 sh -c '" +
-                          script + "' 2>&1";
-  Result r{0, ""};
-  FILE* p = popen(cmd.c_str(), "r");
-  std::array<char, 512> buf{};
-  while (fgets(buf.data(), buf.size(), p)) r.output += buf.data();
-  const int status = pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using tessera::test::run_shell;
 
 const std::string kCase = std::string(TESSERA_SOURCE_DIR) + "/cases/deposition/small.yaml";
 const std::string kSmall =
-    " --set \"deposition.region_max=[12 mm, 12 mm, 3 mm]\" --set output.snapshot_interval=1e-3"
+    " --set 'deposition.region_max=[12 mm, 12 mm, 3 mm]' --set output.snapshot_interval=1e-3"
     " --set output.progress_interval=0.5";
 
 bool rank0() {
@@ -53,7 +36,7 @@ TEST(RunOutputs, SummaryAndXdmfSnapshotsAreComplete) {
   if (!rank0()) return;
   const fs::path out = fs::temp_directory_path() / "tessera_outputs";
   fs::remove_all(out);
-  const Result r = shell(std::string(TESSERA_BIN) + " run " + kCase + kSmall + " --set run.max_steps=3000 --output " +
+  const auto r = run_shell(std::string(TESSERA_BIN) + " run " + kCase + kSmall + " --set run.max_steps=3000 --output " +
                          out.string());
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("packing_fraction"), std::string::npos) << r.output;  // quantities printed
@@ -97,13 +80,26 @@ TEST(RunOutputs, SigtermWritesCheckpointAndStops) {
   if (!rank0()) return;
   const fs::path out = fs::temp_directory_path() / "tessera_sigterm";
   fs::remove_all(out);
-  const Result r = shell(std::string(TESSERA_BIN) + " run " + kCase + kSmall + " --output " + out.string() +
+  const auto r = run_shell(std::string(TESSERA_BIN) + " run " + kCase + kSmall + " --output " + out.string() +
                          " & pid=$!; sleep 3; kill -TERM $pid; wait $pid; echo exit=$?");
   EXPECT_NE(r.output.find("exit=3"), std::string::npos) << r.output;
   EXPECT_TRUE(fs::exists(out / "checkpoint.h5"));
   std::ifstream in(out / "summary.json");
   ASSERT_TRUE(in.good());
   EXPECT_EQ(nlohmann::json::parse(in)["status"], "interrupted");
+}
+
+TEST(RunOutputs, BlowUpStopsWithMessageAndDump) {
+  if (!rank0()) return;
+  const fs::path out = fs::temp_directory_path() / "tessera_blowup";
+  fs::remove_all(out);
+  // dt four times the contact duration: grains pass through each other.
+  const auto r = run_shell(std::string(TESSERA_BIN) + " run " + kCase + kSmall + " --set solid.time_step=1e-4" +
+                           " --output " + out.string());
+  EXPECT_EQ(r.code, 4) << r.output;
+  EXPECT_NE(r.output.find("blow-up at step"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("steps_per_contact"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(out / "failure.h5"));
 }
 
 }  // namespace

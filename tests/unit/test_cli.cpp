@@ -3,32 +3,17 @@
 // leaves no output behind.
 #include <gtest/gtest.h>
 #include <mpi.h>
-#include <sys/wait.h>
 
-#include <array>
-#include <cstdio>
 #include <filesystem>
 #include <string>
 
+#include "support/run_command.hpp"
+
 namespace {
 
-struct Result {
-  int code;
-  std::string output;
-};
+using tessera::test::run_shell;
 
-Result run(const std::string& args) {
-  // The child must not inherit this test's MPI singleton environment.
-  const std::string cmd = "env -i PATH=/usr/bin:/bin OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " TESSERA_BIN
-                          " " + args + " 2>&1";
-  Result r{0, ""};
-  FILE* p = popen(cmd.c_str(), "r");
-  std::array<char, 512> buf{};
-  while (fgets(buf.data(), buf.size(), p)) r.output += buf.data();
-  const int status = pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+tessera::test::CommandResult run(const std::string& args) { return run_shell(std::string(TESSERA_BIN) + " " + args); }
 
 TEST(Cli, BadInputStopsWithExitCode2AndWritesNothing) {
   int rank = 0;
@@ -37,7 +22,7 @@ TEST(Cli, BadInputStopsWithExitCode2AndWritesNothing) {
   const std::filesystem::path out = std::filesystem::temp_directory_path() / "tessera_cli_bad_input";
   std::filesystem::remove_all(out);
   const std::string base = std::string(TESSERA_SOURCE_DIR) + "/cases/deposition/small.yaml --output " + out.string();
-  Result r = run("run " + base + " --set deposition.diameter=-1");
+  auto r = run("run " + base + " --set deposition.diameter=-1");
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("deposition.diameter"), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(out));
