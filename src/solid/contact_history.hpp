@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
-// Tangential contact history keyed by the global ids of the two bodies (lower id first), so that
-// it survives neighbour-list rebuilds, migration between ranks and restarts. The key packs two
-// 32-bit ids; ids must be below 2^32 (checked where bodies are created).
+// Tangential contact history keyed by the permanent order keys of the two bodies (lower first; see
+// ParticleStore::order), so that it survives neighbour-list rebuilds, migration between ranks and
+// restarts. The key packs two 32-bit values; keys and ids are below 2^32 (checked at creation).
 #pragma once
 #include <array>
 #include <cstdint>

@@ -107,19 +107,21 @@ void write_checkpoint(const std::string& path, const DemSolver& dem, const Check
     state.reserve(static_cast<std::size_t>(p.packed_size()) * p.owned);
     for (std::size_t i = 0; i < p.owned; ++i) p.pack(i, state);
     f.write_rows("bodies", state.data(), p.owned, p.packed_size());
-    // Each pair's history is kept by every rank evaluating it; the owner of the lower id writes it.
+    // Each pair's history is kept by every rank evaluating it; the owner of the lower key writes it
+    // (owned bodies are stored sorted by key).
     std::vector<std::uint64_t> keys;
     std::vector<double> hist;
+    const auto owned_end = p.order.begin() + static_cast<std::ptrdiff_t>(p.owned);
     for (const auto& [key, h] : dem.histories()) {
       const auto lo = key_low(key);
-      const auto it = std::lower_bound(p.id.begin(), p.id.begin() + static_cast<std::ptrdiff_t>(p.owned), lo);
-      if (it == p.id.begin() + static_cast<std::ptrdiff_t>(p.owned) || *it != lo) continue;
+      const auto it = std::lower_bound(p.order.begin(), owned_end, lo);
+      if (it == owned_end || *it != lo) continue;
       keys.push_back(key);
       hist.insert(hist.end(), h.begin(), h.end());
     }
     f.write_rows("pair_keys", keys.data(), keys.size(), 1);
     f.write_rows("pair_history", hist.data(), keys.size(), 3);
-    f.set_attribute("format", std::string("tessera-dem-checkpoint-1"));
+    f.set_attribute("format", std::string("tessera-dem-checkpoint-2"));
     f.set_attribute("time", dem.time());
     f.set_attribute("steps", dem.steps());
     f.set_attribute("wall_slots", static_cast<long>(p.wall_slots));
@@ -136,8 +138,8 @@ void write_checkpoint(const std::string& path, const DemSolver& dem, const Check
 CheckpointExtras read_checkpoint(const std::string& path, DemSolver& dem) {
   MPI_Comm comm = dem.decomposition().comm();
   H5File f = H5File::open_read(path, comm);
-  if (f.attribute_string("format") != "tessera-dem-checkpoint-1")
-    throw InputError("restart", path, "a Tessera DEM checkpoint (format tessera-dem-checkpoint-1)");
+  if (f.attribute_string("format") != "tessera-dem-checkpoint-2")
+    throw InputError("restart", path, "a Tessera DEM checkpoint (format tessera-dem-checkpoint-2)");
   ParticleStore& p = dem.particles();
   if (f.attribute_long("wall_slots") != p.wall_slots)
     throw InputError("restart", path, "a checkpoint made with the same walls as this case (" +

@@ -82,6 +82,7 @@ void DemSolver::setup(bool fresh) {
   dt_ = settings_.time_step ? *settings_.time_step : t_contact_ / settings_.steps_per_contact;
   skin_ = settings_.skin ? *settings_.skin : 0.5 * r_min;
 
+  if (fresh) assign_order();
   rebuild();
   if (fresh) {
     // Forces of the initial state for the first half-kick; histories must not advance here.
@@ -98,21 +99,82 @@ HistoryMap DemSolver::histories() const {
   return h;
 }
 
-void DemSolver::sort_owned_by_id() {
-  // Storage in id order keeps the canonical pair order close to memory order.
-  auto by_id = [&](std::size_t a, std::size_t b) { return p_.id[a] < p_.id[b]; };
-  std::vector<std::size_t> order(p_.owned);
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  if (std::is_sorted(order.begin(), order.end(), by_id)) return;
-  std::sort(order.begin(), order.end(), by_id);
+void DemSolver::sort_owned_by_order() {
+  auto by_order = [&](std::size_t a, std::size_t b) { return p_.order[a] < p_.order[b]; };
+  std::vector<std::size_t> perm(p_.owned);
+  std::iota(perm.begin(), perm.end(), std::size_t{0});
+  if (std::is_sorted(perm.begin(), perm.end(), by_order)) return;
+  std::sort(perm.begin(), perm.end(), by_order);
   std::vector<double> buf;
   buf.reserve(static_cast<std::size_t>(p_.packed_size()) * p_.owned);
-  for (const auto i : order) p_.pack(i, buf);
+  for (const auto i : perm) p_.pack(i, buf);
   const std::size_t owned = p_.owned, stride = static_cast<std::size_t>(p_.packed_size());
   p_.resize(0);
   for (std::size_t k = 0; k < owned; ++k) p_.unpack_append(&buf[k * stride]);
   p_.owned = owned;
   p_.ghosts = 0;
+}
+
+namespace {
+
+// Interleaves the low 21 bits of x, y, z (Morton / Z-order code).
+std::uint64_t morton(std::uint64_t x, std::uint64_t y, std::uint64_t z) {
+  auto spread = [](std::uint64_t v) {
+    v &= 0x1fffff;
+    v = (v | v << 32) & 0x1f00000000ffffULL;
+    v = (v | v << 16) & 0x1f0000ff0000ffULL;
+    v = (v | v << 8) & 0x100f00f00f00f00fULL;
+    v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+    v = (v | v << 2) & 0x1249249249249249ULL;
+    return v;
+  };
+  return spread(x) | spread(y) << 1 | spread(z) << 2;
+}
+
+}  // namespace
+
+void DemSolver::assign_order() {
+  // Every body's Morton code in the global box, sorted globally with the id breaking ties; a body's
+  // key is its rank in that sort. Gathered on rank 0: 16 bytes per body.
+  MPI_Comm comm = decomp_.comm();
+  const Vec3 lo = decomp_.global_lo(), hi = decomp_.global_hi();
+  std::vector<std::uint64_t> mine(2 * p_.owned);
+  for (std::size_t i = 0; i < p_.owned; ++i) {
+    std::uint64_t q[3];
+    for (int d = 0; d < 3; ++d) {
+      const double t = (p_.x[3 * i + d] - lo[d]) / (hi[d] - lo[d]);
+      q[d] = static_cast<std::uint64_t>(std::clamp(t, 0.0, 1.0) * 2097151.0);
+    }
+    mine[2 * i] = morton(q[0], q[1], q[2]);
+    mine[2 * i + 1] = static_cast<std::uint64_t>(p_.id[i]);
+  }
+  int size = 1, rank = 0, n = static_cast<int>(mine.size());
+  MPI_Comm_size(comm, &size);
+  MPI_Comm_rank(comm, &rank);
+  std::vector<int> counts(size), displs(size, 0), half_counts(size), half_displs(size, 0);
+  MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm);
+  std::vector<std::uint64_t> all;
+  std::vector<std::int64_t> keys;
+  if (rank == 0) {
+    for (int r = 1; r < size; ++r) displs[r] = displs[r - 1] + counts[r - 1];
+    for (int r = 0; r < size; ++r) half_counts[r] = counts[r] / 2, half_displs[r] = displs[r] / 2;
+    all.resize(static_cast<std::size_t>(displs[size - 1] + counts[size - 1]));
+  }
+  MPI_Gatherv(mine.data(), n, MPI_UINT64_T, all.data(), counts.data(), displs.data(), MPI_UINT64_T, 0, comm);
+  if (rank == 0) {
+    const std::size_t total = all.size() / 2;
+    std::vector<std::size_t> perm(total);
+    std::iota(perm.begin(), perm.end(), std::size_t{0});
+    std::sort(perm.begin(), perm.end(), [&](std::size_t a, std::size_t b) {
+      return all[2 * a] != all[2 * b] ? all[2 * a] < all[2 * b] : all[2 * a + 1] < all[2 * b + 1];
+    });
+    keys.resize(total);
+    for (std::size_t k = 0; k < total; ++k) keys[perm[k]] = static_cast<std::int64_t>(k);
+  }
+  std::vector<std::int64_t> my_keys(p_.owned);
+  MPI_Scatterv(keys.data(), half_counts.data(), half_displs.data(), MPI_INT64_T, my_keys.data(),
+               static_cast<int>(p_.owned), MPI_INT64_T, 0, comm);
+  for (std::size_t i = 0; i < p_.owned; ++i) p_.order[i] = my_keys[i];
 }
 
 void DemSolver::rebuild() {
@@ -122,7 +184,7 @@ void DemSolver::rebuild() {
   {
     auto t = timers_.scope("migration");
     halo_.migrate(p_, histories);
-    sort_owned_by_id();
+    sort_owned_by_order();
   }
   {
     auto t = timers_.scope("ghost_comm");
@@ -255,7 +317,7 @@ void DemSolver::compute_forces_with(bool update_history) {
       const double* v = &p_.v[3 * i];
       const double* w = &p_.omega[3 * i];
       k_geometry_[i] = {x[0], x[1], x[2], p_.radius[i]};
-      k_motion_[i] = {v[0], v[1], v[2], w[0], w[1], w[2], p_.material[i]};
+      k_motion_[i] = {v[0], v[1], v[2], w[0], w[1], w[2]};
     }
     const KernelGeometry* g = k_geometry_.data();
     const KernelMotion* m = k_motion_.data();

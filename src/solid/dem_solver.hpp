@@ -99,7 +99,8 @@ class DemSolver {
   void fill_pair_coefficients();
   void integrate_first();
   void integrate_second();
-  void sort_owned_by_id();
+  void sort_owned_by_order();
+  void assign_order();
 
   const Decomposition& decomp_;
   ContactModel model_;
@@ -122,7 +123,6 @@ class DemSolver {
   };
   struct alignas(64) KernelMotion {
     double vx, vy, vz, wx, wy, wz;
-    std::int64_t material;
   };
   struct alignas(64) KernelForce {
     double fx, fy, fz, tx, ty, tz;

@@ -52,7 +52,7 @@ void Halo::migrate(ParticleStore& p, HistoryMap& histories) {
           }
           indexed = true;
         }
-        const auto range = by_body.equal_range(p.id[i]);
+        const auto range = by_body.equal_range(p.order[i]);
         for (auto it = range.first; it != range.second; ++it) {
           const auto& h = histories.at(it->second);
           hist_out.push_back(static_cast<double>(it->second >> 32));

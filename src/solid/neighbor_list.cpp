@@ -74,8 +74,8 @@ void NeighborList::build(const ParticleStore& p, double skin, const HistoryMap& 
     }
     const double cut = p.radius[a] + p.radius[b] + skin;
     if (r2 >= cut * cut) return;
-    const bool a_low = p.id[a] < p.id[b];
-    candidates_.push_back({pair_key(p.id[a], p.id[b]), static_cast<std::int32_t>(a_low ? a : b),
+    const bool a_low = p.order[a] < p.order[b];
+    candidates_.push_back({pair_key(p.order[a], p.order[b]), static_cast<std::int32_t>(a_low ? a : b),
                            static_cast<std::int32_t>(a_low ? b : a)});
   };
 
@@ -90,7 +90,7 @@ void NeighborList::build(const ParticleStore& p, double skin, const HistoryMap& 
           const int cc = (z * nc[1] + y) * nc[0] + x;
           for (int k = cell_start_[cc]; k < cell_start_[cc + 1]; ++k) {
             const auto j = static_cast<std::size_t>(cell_items_[k]);
-            if (p.id[j] > p.id[i]) consider(i, j);
+            if (p.order[j] > p.order[i]) consider(i, j);
           }
         }
   }

@@ -8,10 +8,10 @@
 // a body larger than r_ref scans the cells its reach covers, so one 43 mm ball among 0.6 mm grains
 // costs one scan of its neighbourhood, not a grid of 45 mm cells.
 //
-// Determinism: pairs are stored in canonical orientation (lower global id first) and sorted by
-// (lower id, higher id). Forces accumulated in that order reach each body in the order of its
-// partners' global ids, whatever the decomposition: results are bitwise independent of the rank
-// count (tests/mpi/test_rank_independence.cpp).
+// Determinism: pairs are stored in canonical orientation (lower order key first, see
+// ParticleStore::order) and sorted by (lower key, higher key). Forces accumulated in that order reach
+// each body in the order of its partners' keys, whatever the decomposition: results are bitwise
+// independent of the rank count (tests/mpi/test_rank_independence.cpp).
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -30,7 +30,7 @@ class NeighborList {
   void collect(HistoryMap& out) const;
 
   std::size_t size() const { return first.size(); }
-  std::vector<std::int32_t> first, second;  // local indices; id[first] < id[second]
+  std::vector<std::int32_t> first, second;  // local indices; order[first] < order[second]
   std::vector<PairKey> keys;
   std::vector<double> history;              // 3 per pair (xi of eq. 5)
   std::vector<double> meff;                 // m_a m_b / (m_a + m_b), constant while listed

@@ -7,6 +7,7 @@ namespace tessera {
 
 void ParticleStore::resize(std::size_t n) {
   id.resize(n);
+  order.resize(n);
   material.resize(n);
   shape.resize(n);
   radius.resize(n);
@@ -26,6 +27,7 @@ std::size_t ParticleStore::push_back(std::int64_t gid, int mat, double r, double
   const std::size_t i = id.size();
   resize(i + 1);
   id[i] = gid;
+  order[i] = -1;  // assigned at set-up (DemSolver::assign_order)
   material[i] = mat;
   shape[i] = 0;
   radius[i] = r;
@@ -44,6 +46,7 @@ std::size_t ParticleStore::push_back(std::int64_t gid, int mat, double r, double
 void ParticleStore::copy(std::size_t s, std::size_t d) {
   if (s == d) return;
   id[d] = id[s];
+  order[d] = order[s];
   material[d] = material[s];
   shape[d] = shape[s];
   radius[d] = radius[s];
@@ -64,6 +67,7 @@ void ParticleStore::copy(std::size_t s, std::size_t d) {
 void ParticleStore::swap(std::size_t a, std::size_t b) {
   if (a == b) return;
   std::swap(id[a], id[b]);
+  std::swap(order[a], order[b]);
   std::swap(material[a], material[b]);
   std::swap(shape[a], shape[b]);
   std::swap(radius[a], radius[b]);
@@ -94,6 +98,7 @@ void ParticleStore::pack(std::size_t i, std::vector<double>& buf) const {
   for (int k = 0; k < 4; ++k) buf.push_back(q[4 * i + k]);
   for (int k = 0; k < 3; ++k) buf.push_back(f[3 * i + k]);
   for (int k = 0; k < 3; ++k) buf.push_back(torque[3 * i + k]);
+  buf.push_back(static_cast<double>(order[i]));
   const std::size_t w = 3 * static_cast<std::size_t>(wall_slots);
   for (std::size_t k = 0; k < w; ++k) buf.push_back(wall_history[w * i + k]);
 }
@@ -113,13 +118,15 @@ std::size_t ParticleStore::unpack_append(const double* b) {
   for (int k = 0; k < 4; ++k) q[4 * i + k] = b[15 + k];
   for (int k = 0; k < 3; ++k) f[3 * i + k] = b[19 + k];
   for (int k = 0; k < 3; ++k) torque[3 * i + k] = b[22 + k];
+  order[i] = static_cast<std::int64_t>(b[25]);
   const std::size_t w = 3 * static_cast<std::size_t>(wall_slots);
-  for (std::size_t k = 0; k < w; ++k) wall_history[w * i + k] = b[25 + k];
+  for (std::size_t k = 0; k < w; ++k) wall_history[w * i + k] = b[26 + k];
   return i;
 }
 
 void ParticleStore::pack_ghost(std::size_t i, std::vector<double>& buf) const {
   buf.push_back(static_cast<double>(id[i]));
+  buf.push_back(static_cast<double>(order[i]));
   buf.push_back(material[i]);
   buf.push_back(radius[i]);
   buf.push_back(mass[i]);
@@ -132,14 +139,15 @@ void ParticleStore::unpack_ghost_append(const double* b) {
   const std::size_t i = id.size();
   resize(i + 1);
   id[i] = static_cast<std::int64_t>(b[0]);
-  material[i] = static_cast<std::int32_t>(b[1]);
+  order[i] = static_cast<std::int64_t>(b[1]);
+  material[i] = static_cast<std::int32_t>(b[2]);
   shape[i] = 0;
-  radius[i] = b[2];
-  mass[i] = b[3];
-  inertia[i] = 0.4 * b[3] * b[2] * b[2];
-  for (int k = 0; k < 3; ++k) x[3 * i + k] = b[4 + k];
-  for (int k = 0; k < 3; ++k) v[3 * i + k] = b[7 + k];
-  for (int k = 0; k < 3; ++k) omega[3 * i + k] = b[10 + k];
+  radius[i] = b[3];
+  mass[i] = b[4];
+  inertia[i] = 0.4 * b[4] * b[3] * b[3];
+  for (int k = 0; k < 3; ++k) x[3 * i + k] = b[5 + k];
+  for (int k = 0; k < 3; ++k) v[3 * i + k] = b[8 + k];
+  for (int k = 0; k < 3; ++k) omega[3 * i + k] = b[11 + k];
 }
 
 }  // namespace tessera

@@ -17,7 +17,11 @@ namespace tessera {
 
 struct ParticleStore {
   // Per body.
-  std::vector<std::int64_t> id;      // global id, unique, stable for the whole run
+  std::vector<std::int64_t> id;      // global id, unique, stable for the whole run (user-facing)
+  // Canonical order key, unique, permanent: the body's rank in a Morton (Z-order) sort of the initial
+  // positions. Storage, contact orientation (lower key first) and the order forces are summed in
+  // follow it: neighbours are close in memory, and the order is the same on every decomposition.
+  std::vector<std::int64_t> order;
   std::vector<std::int32_t> material;
   std::vector<std::int32_t> shape;   // 0 = sphere
   std::vector<double> radius;        // contact radius (sphere)
@@ -45,13 +49,13 @@ struct ParticleStore {
   Vec3 ang(std::size_t i) const { return Vec3::load(&omega[3 * i]); }
 
   // Full state of one body, for migration and checkpoints: number of doubles per body.
-  int packed_size() const { return 25 + 3 * wall_slots; }
+  int packed_size() const { return 26 + 3 * wall_slots; }
   void pack(std::size_t i, std::vector<double>& buf) const;
   // Appends a body unpacked from buf at offset; returns the new offset.
   std::size_t unpack_append(const double* buf);
 
-  // What a ghost needs for contact forces: id, material, radius, mass, x, v, omega.
-  static constexpr int ghost_size = 13;
+  // What a ghost needs for contact forces: id, order, material, radius, mass, x, v, omega.
+  static constexpr int ghost_size = 14;
   void pack_ghost(std::size_t i, std::vector<double>& buf) const;
   void unpack_ghost_append(const double* buf);
   static constexpr int forward_size = 9;  // x, v, omega, sent every step
