@@ -7,7 +7,7 @@
 // | integrate a body                   | the rank whose sub-box holds its centre (owner)        |
 // | evaluate a contact (a, b)          | every rank that owns a or b; a rank owning both does it |
 // |                                    | once; ghost-ghost pairs are never evaluated            |
-// | force on a body                    | summed by its owner only, in partner-id order; a ghost |
+// | force on a body                    | summed by its owner only, in partner-key order; a ghost |
 // |                                    | copy's force is discarded (no reverse communication)   |
 // | contact history (a, b)             | kept by every rank evaluating (a, b): identical copies |
 // |                                    | since both evaluate the same canonical expression      |

@@ -2,6 +2,7 @@
 // Case files: units on entry, defaults, overrides, and errors that name key, value and what is allowed.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 #include <functional>
 
@@ -113,6 +114,22 @@ TEST(Config, InconsistentInputIsCaughtBeforeAnyWork) {
   EXPECT_NE(scene_error({"deposition.lattice_spacing=0.5 mm"}).find("at least the grain diameter"), std::string::npos);
   EXPECT_NE(scene_error({"solid.walls.0.material=steel"}).find("solid.walls.0.material"), std::string::npos);
   EXPECT_NE(scene_error({"solid.frobnicate=1"}).find("solid.frobnicate"), std::string::npos);
+}
+
+// Every case file shipped in cases/ is valid: it parses, every key is known, every value in range.
+TEST(Config, ShippedCaseFilesAreValid) {
+  int checked = 0;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(std::string(TESSERA_SOURCE_DIR) + "/cases")) {
+    if (entry.path().extension() != ".yaml") continue;
+    const std::string m = error_of([&] {
+      Config c = Config::load(entry.path().string());
+      auto s = make_scene(c.root(), MPI_COMM_WORLD, entry.path().parent_path().string());
+      c.check_unused();
+    });
+    EXPECT_EQ(m, "") << entry.path();
+    ++checked;
+  }
+  EXPECT_GE(checked, 2);
 }
 
 }  // namespace
