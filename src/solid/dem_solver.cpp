@@ -178,9 +178,22 @@ void DemSolver::assign_order() {
 }
 
 void DemSolver::rebuild() {
+  // Histories that must travel: restart entries, and the pairs of bodies about to leave this rank
+  // (the new list takes everything else from the old one by a merge of sorted keys).
   HistoryMap histories = std::move(pending_);
   pending_.clear();
-  list_.collect(histories);
+  if (decomp_.size() > 1) {
+    std::vector<char> leaving(p_.size(), 0);
+    bool any = false;
+    for (std::size_t i = 0; i < p_.owned; ++i)
+      if (!decomp_.owns(p_.pos(i))) leaving[i] = 1, any = true;
+    if (any)
+      for (std::size_t k = 0; k < list_.size(); ++k) {
+        const double* h = &list_.history[3 * k];
+        if ((leaving[list_.first[k]] || leaving[list_.second[k]]) && (h[0] != 0.0 || h[1] != 0.0 || h[2] != 0.0))
+          histories[list_.keys[k]] = {h[0], h[1], h[2]};
+      }
+  }
   {
     auto t = timers_.scope("migration");
     halo_.migrate(p_, histories);
@@ -233,43 +246,53 @@ bool DemSolver::needs_rebuild() {
 }
 
 void DemSolver::integrate_first() {
-  const double h = 0.5 * dt_;
-  const Vec3 g = settings_.gravity;
-  for (std::size_t i = 0; i < p_.owned; ++i) {
-    const double inv_m = inv_mass_[i], inv_i = inv_inertia_[i];
-    double* v = &p_.v[3 * i];
-    double* w = &p_.omega[3 * i];
-    double* x = &p_.x[3 * i];
-    const double* f = &p_.f[3 * i];
-    const double* t = &p_.torque[3 * i];
+  const double h = 0.5 * dt_, dt = dt_;
+  const double g[3] = {settings_.gravity.x, settings_.gravity.y, settings_.gravity.z};
+  double* __restrict x = p_.x.data();
+  double* __restrict v = p_.v.data();
+  double* __restrict w = p_.omega.data();
+  double* __restrict q = p_.q.data();
+  const double* __restrict f = p_.f.data();
+  const double* __restrict t = p_.torque.data();
+  const double* __restrict inv_m = inv_mass_.data();
+  const double* __restrict inv_i = inv_inertia_.data();
+  const std::size_t n = p_.owned;
+  for (std::size_t i = 0; i < n; ++i)
     for (int k = 0; k < 3; ++k) {
-      v[k] += h * (f[k] * inv_m + g[k]);
-      w[k] += h * t[k] * inv_i;
-      x[k] += dt_ * v[k];
+      v[3 * i + k] += h * (f[3 * i + k] * inv_m[i] + g[k]);
+      w[3 * i + k] += h * t[3 * i + k] * inv_i[i];
+      x[3 * i + k] += dt * v[3 * i + k];
     }
-    // Orientation: q <- normalize(q + dt/2 (0, w) q). The update changes |q|^2 by O((w dt)^2), so
-    // one Newton step of 1/sqrt about 1 normalises to round-off without a square root.
-    double* q = &p_.q[4 * i];
-    const double qw = q[0], qx = q[1], qy = q[2], qz = q[3];
-    q[0] = qw + h * (-w[0] * qx - w[1] * qy - w[2] * qz);
-    q[1] = qx + h * (w[0] * qw + w[1] * qz - w[2] * qy);
-    q[2] = qy + h * (w[1] * qw + w[2] * qx - w[0] * qz);
-    q[3] = qz + h * (w[2] * qw + w[0] * qy - w[1] * qx);
-    const double scale = 0.5 * (3.0 - (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]));
-    for (int k = 0; k < 4; ++k) q[k] *= scale;
+  // Orientation: q <- normalize(q + dt/2 (0, w) q). The update changes |q|^2 by O((w dt)^2), so one
+  // Newton step of 1/sqrt about 1 normalises to round-off without a square root.
+  for (std::size_t i = 0; i < n; ++i) {
+    double* qi = q + 4 * i;
+    const double* wi = w + 3 * i;
+    const double qw = qi[0], qx = qi[1], qy = qi[2], qz = qi[3];
+    const double a = qw + h * (-wi[0] * qx - wi[1] * qy - wi[2] * qz);
+    const double b = qx + h * (wi[0] * qw + wi[1] * qz - wi[2] * qy);
+    const double c = qy + h * (wi[1] * qw + wi[2] * qx - wi[0] * qz);
+    const double d = qz + h * (wi[2] * qw + wi[0] * qy - wi[1] * qx);
+    const double scale = 0.5 * (3.0 - (a * a + b * b + c * c + d * d));
+    qi[0] = a * scale, qi[1] = b * scale, qi[2] = c * scale, qi[3] = d * scale;
   }
 }
 
 void DemSolver::integrate_second() {
   const double h = 0.5 * dt_;
-  const Vec3 g = settings_.gravity;
-  for (std::size_t i = 0; i < p_.owned; ++i) {
-    const double inv_m = inv_mass_[i], inv_i = inv_inertia_[i];
+  const double g[3] = {settings_.gravity.x, settings_.gravity.y, settings_.gravity.z};
+  double* __restrict v = p_.v.data();
+  double* __restrict w = p_.omega.data();
+  const double* __restrict f = p_.f.data();
+  const double* __restrict t = p_.torque.data();
+  const double* __restrict inv_m = inv_mass_.data();
+  const double* __restrict inv_i = inv_inertia_.data();
+  const std::size_t n = p_.owned;
+  for (std::size_t i = 0; i < n; ++i)
     for (int k = 0; k < 3; ++k) {
-      p_.v[3 * i + k] += h * (p_.f[3 * i + k] * inv_m + g[k]);
-      p_.omega[3 * i + k] += h * p_.torque[3 * i + k] * inv_i;
+      v[3 * i + k] += h * (f[3 * i + k] * inv_m[i] + g[k]);
+      w[3 * i + k] += h * t[3 * i + k] * inv_i[i];
     }
-  }
 }
 
 template <class Law>

@@ -7,10 +7,12 @@
 
 namespace tessera {
 
-void NeighborList::build(const ParticleStore& p, double skin, const HistoryMap& histories) {
+void NeighborList::build(const ParticleStore& p, double skin, const HistoryMap& extra) {
   ++builds;
   const std::size_t n = p.size();
   candidates_.clear();
+  previous_keys_.swap(keys);
+  previous_history_.swap(history);
   first.clear(), second.clear(), keys.clear(), history.clear(), meff.clear();
   if (n == 0) return;
 
@@ -117,15 +119,20 @@ void NeighborList::build(const ParticleStore& p, double skin, const HistoryMap& 
             [](const Candidate& l, const Candidate& r) { return l.key < r.key; });
   const std::size_t np = candidates_.size();
   first.resize(np), second.resize(np), keys.resize(np), history.assign(3 * np, 0.0), meff.resize(np);
+  std::size_t old = 0;
+  const std::size_t n_old = previous_keys_.size();
   for (std::size_t k = 0; k < np; ++k) {
     first[k] = candidates_[k].a;
     second[k] = candidates_[k].b;
     keys[k] = candidates_[k].key;
     const double ma = p.mass[first[k]], mb = p.mass[second[k]];
     meff[k] = ma * mb / (ma + mb);
-    if (!histories.empty()) {
-      const auto it = histories.find(keys[k]);
-      if (it != histories.end())
+    while (old < n_old && previous_keys_[old] < keys[k]) ++old;
+    if (old < n_old && previous_keys_[old] == keys[k]) {
+      for (int d = 0; d < 3; ++d) history[3 * k + d] = previous_history_[3 * old + d];
+    } else if (!extra.empty()) {
+      const auto it = extra.find(keys[k]);
+      if (it != extra.end())
         for (int d = 0; d < 3; ++d) history[3 * k + d] = it->second[d];
     }
   }

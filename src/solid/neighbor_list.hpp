@@ -23,9 +23,10 @@ namespace tessera {
 
 class NeighborList {
  public:
-  // Lists pairs with at least one owned body. Histories of pairs found in `histories` are copied
-  // into the list; others start at zero.
-  void build(const ParticleStore& p, double skin, const HistoryMap& histories);
+  // Lists pairs with at least one owned body. A pair's history comes from the previous list (a
+  // merge of the two sorted key lists), else from `extra` (bodies that migrated in, a restart),
+  // else starts at zero.
+  void build(const ParticleStore& p, double skin, const HistoryMap& extra);
   // Touching pairs' histories (non-zero), for the next build or for migration.
   void collect(HistoryMap& out) const;
 
@@ -43,6 +44,8 @@ class NeighborList {
     std::int32_t a, b;
   };
   std::vector<Candidate> candidates_;
+  std::vector<PairKey> previous_keys_;
+  std::vector<double> previous_history_;
   std::vector<std::int32_t> cell_start_, cell_items_, cell_of_;
 };
 
