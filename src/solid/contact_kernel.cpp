@@ -5,16 +5,21 @@ namespace tessera {
 
 namespace {
 
-template <class Law>
+template <class Law, bool wall>
 inline void evaluate(ContactLanes& L, std::size_t count, double dt) {
   for (std::size_t j = 0; j < count; ++j) {
     const Vec3 d{L.dx[j], L.dy[j], L.dz[j]};
-    const double r = std::sqrt(norm2(d));
-    const Vec3 nrm = d * (1.0 / r);
+    double delta = L.rb[j];
+    Vec3 nrm = d;
+    if constexpr (!wall) {
+      const double r = std::sqrt(norm2(d));
+      nrm = d * (1.0 / r);
+      delta = L.ra[j] + L.rb[j] - r;
+    }
     const Vec3 v_rel = Vec3{L.vx[j], L.vy[j], L.vz[j]} - cross(Vec3{L.wx[j], L.wy[j], L.wz[j]}, nrm);
     const double c[5] = {L.coef[0][j], L.coef[1][j], L.coef[2][j], L.coef[3][j], L.coef[4][j]};
     Vec3 xi{L.hx[j], L.hy[j], L.hz[j]};
-    const Vec3 force = contact_force<Law>(c, L.ra[j] + L.rb[j] - r, nrm, v_rel, dt, xi);
+    const Vec3 force = contact_force<Law>(c, delta, nrm, v_rel, dt, xi);
     const Vec3 nf = cross(nrm, force);
     L.hx[j] = xi.x, L.hy[j] = xi.y, L.hz[j] = xi.z;
     L.fx[j] = force.x, L.fy[j] = force.y, L.fz[j] = force.z;
@@ -30,11 +35,19 @@ inline void evaluate(ContactLanes& L, std::size_t count, double dt) {
 #endif
 
 TESSERA_CLONES void evaluate_linear(ContactLanes& lanes, std::size_t count, double dt) {
-  evaluate<LinearSpringDashpot>(lanes, count, dt);
+  evaluate<LinearSpringDashpot, false>(lanes, count, dt);
 }
 
 TESSERA_CLONES void evaluate_hertz(ContactLanes& lanes, std::size_t count, double dt) {
-  evaluate<HertzMindlin>(lanes, count, dt);
+  evaluate<HertzMindlin, false>(lanes, count, dt);
+}
+
+TESSERA_CLONES void evaluate_linear_wall(ContactLanes& lanes, std::size_t count, double dt) {
+  evaluate<LinearSpringDashpot, true>(lanes, count, dt);
+}
+
+TESSERA_CLONES void evaluate_hertz_wall(ContactLanes& lanes, std::size_t count, double dt) {
+  evaluate<HertzMindlin, true>(lanes, count, dt);
 }
 
 }  // namespace
@@ -42,6 +55,11 @@ TESSERA_CLONES void evaluate_hertz(ContactLanes& lanes, std::size_t count, doubl
 void evaluate_contacts(LawKind law, ContactLanes& lanes, std::size_t count, double dt) {
   if (law == LawKind::linear_spring_dashpot) evaluate_linear(lanes, count, dt);
   else evaluate_hertz(lanes, count, dt);
+}
+
+void evaluate_wall_contacts(LawKind law, ContactLanes& lanes, std::size_t count, double dt) {
+  if (law == LawKind::linear_spring_dashpot) evaluate_linear_wall(lanes, count, dt);
+  else evaluate_hertz_wall(lanes, count, dt);
 }
 
 }  // namespace tessera

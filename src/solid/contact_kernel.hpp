@@ -23,6 +23,10 @@ struct ContactLanes {
   alignas(64) double fx[width], fy[width], fz[width], nx[width], ny[width], nz[width];
 };
 
+// Body-body contacts: lanes hold d = x_a - x_b, R_a, R_b.
 void evaluate_contacts(LawKind law, ContactLanes& lanes, std::size_t count, double dt);
+// Body-wall contacts: lanes hold the unit normal (wall to body) in d, R in ra and the overlap in rb;
+// v and w are the body's v and R w.
+void evaluate_wall_contacts(LawKind law, ContactLanes& lanes, std::size_t count, double dt);
 
 }  // namespace tessera

@@ -206,8 +206,6 @@ void DemSolver::rebuild() {
   {
     auto t = timers_.scope("neighbor");
     list_.build(p_, skin_, histories);
-    if (model_.law() == LawKind::linear_spring_dashpot) fill_pair_coefficients<LinearSpringDashpot>();
-    else fill_pair_coefficients<HertzMindlin>();
     touching_before_.clear();
     for (std::size_t k = 0; k < list_.size(); ++k)
       if (list_.history[3 * k] != 0.0 || list_.history[3 * k + 1] != 0.0 || list_.history[3 * k + 2] != 0.0)
@@ -229,6 +227,8 @@ void DemSolver::rebuild() {
         }
       }
     }
+    if (model_.law() == LawKind::linear_spring_dashpot) fill_pair_coefficients<LinearSpringDashpot>();
+    else fill_pair_coefficients<HertzMindlin>();
   }
 }
 
@@ -311,19 +311,31 @@ void DemSolver::fill_pair_coefficients() {
   };
   std::unordered_map<Key, std::int32_t, KeyHash> index;
   coefficient_sets_.clear();
+  Key last{-1, -1, 0, 0};
+  std::int32_t last_index = -1;
+  auto lookup = [&](const Key& key) {
+    if (key == last) return last_index;  // neighbours in a list are often alike: skip the hash
+    const auto [it, added] = index.emplace(key, static_cast<std::int32_t>(coefficient_sets_.size()));
+    if (added) coefficient_sets_.push_back(Law::coefficients(model_.pair(key.ma, key.mb), key.meff, key.reff));
+    last = key, last_index = it->second;
+    return it->second;
+  };
   pair_coefficient_.resize(list_.size());
   for (std::size_t k = 0; k < list_.size(); ++k) {
     const std::size_t a = list_.first[k], b = list_.second[k];
     const double ra = p_.radius[a], rb = p_.radius[b];
-    const Key key{p_.material[a], p_.material[b], list_.meff[k], ra * rb / (ra + rb)};
-    const auto [it, added] = index.emplace(key, static_cast<std::int32_t>(coefficient_sets_.size()));
-    if (added) coefficient_sets_.push_back(Law::coefficients(model_.pair(key.ma, key.mb), key.meff, key.reff));
-    pair_coefficient_[k] = it->second;
+    pair_coefficient_[k] = lookup({p_.material[a], p_.material[b], list_.meff[k], ra * rb / (ra + rb)});
+  }
+  // Walls: m* = m, R* = R (T7).
+  const auto& prims = walls_.primitives();
+  wall_coefficient_.resize(wall_body_.size());
+  for (std::size_t k = 0; k < wall_body_.size(); ++k) {
+    const std::size_t i = wall_body_[k];
+    wall_coefficient_[k] = lookup({p_.material[i], prims[wall_slot_[k]].material, p_.mass[i], p_.radius[i]});
   }
 }
 
-template <class Law>
-void DemSolver::compute_forces_with(bool update_history) {
+void DemSolver::compute_forces(bool update_history) {
   const std::size_t n = p_.size();
   const double dt = update_history ? dt_ : 0.0;
   const std::size_t np = list_.size();
@@ -420,45 +432,55 @@ void DemSolver::compute_forces_with(bool update_history) {
   const double* v = p_.v.data();
   const double* w = p_.omega.data();
   const double* rad = p_.radius.data();
-  const double* mass = p_.mass.data();
-  const std::int32_t* mat = p_.material.data();
   double* f = p_.f.data();
   double* tq = p_.torque.data();
   auto t = timers_.scope("wall_forces");
+  // Walls: bodies near a wall at the last rebuild, in (body, wall) order; same lanes and law.
   const auto& prims = walls_.primitives();
-  const int slots = walls_.slots();
+  const std::size_t slots = static_cast<std::size_t>(walls_.slots());
   for (auto& wf : wall_force_) wf = Vec3{};
+  ContactLanes& L = lanes_;
+  std::int32_t lane_entry[ContactLanes::width];
+  const ContactCoefficients* sets = coefficient_sets_.data();
+  std::size_t nb = 0;
+  auto flush = [&] {
+    evaluate_wall_contacts(model_.law(), L, nb, dt);
+    for (std::size_t j = 0; j < nb; ++j) {
+      const std::size_t k = static_cast<std::size_t>(lane_entry[j]);
+      const std::size_t i = wall_body_[k];
+      double* h = &p_.wall_history[3 * (i * slots + wall_slot_[k])];
+      h[0] = L.hx[j], h[1] = L.hy[j], h[2] = L.hz[j];
+      const Vec3 force{L.fx[j], L.fy[j], L.fz[j]};
+      force.add_to(f + 3 * i);
+      (Vec3{L.nx[j], L.ny[j], L.nz[j]} * L.ra[j]).subtract_from(tq + 3 * i);
+      wall_force_[wall_slot_[k]] -= force;
+    }
+    nb = 0;
+  };
   for (std::size_t k = 0; k < wall_body_.size(); ++k) {
     const std::size_t i = wall_body_[k];
-    const int s = wall_slot_[k];
-    const Vec3 xi = Vec3::load(x + 3 * i);
+    const std::size_t s = wall_slot_[k];
+    double* h = &p_.wall_history[3 * (i * slots + s)];
+    Vec3 nrm;
     const double ri = rad[i];
-    {
-      double* h = &p_.wall_history[3 * (i * slots + s)];
-      Vec3 nrm;
-      const double delta = prims[s].overlap(xi, ri, nrm);
-      if (delta <= 0.0) {
-        h[0] = h[1] = h[2] = 0.0;
-        continue;
-      }
-      const Vec3 v_rel = Vec3::load(v + 3 * i) - cross(Vec3::load(w + 3 * i) * ri, nrm);
-      const ContactCoefficients c = Law::coefficients(model_.pair(mat[i], prims[s].material), mass[i], ri);
-      Vec3 xi = Vec3::load(h);
-      const Vec3 force = contact_force<Law>(c.c, delta, nrm, v_rel, dt, xi);
-      xi.store(h);
-      force.add_to(f + 3 * i);
-      (cross(nrm, force) * ri).subtract_from(tq + 3 * i);
-      wall_force_[s] -= force;
+    const double delta = prims[s].overlap(Vec3::load(x + 3 * i), ri, nrm);
+    if (delta <= 0.0) {
+      h[0] = h[1] = h[2] = 0.0;
+      continue;
     }
+    L.dx[nb] = nrm.x, L.dy[nb] = nrm.y, L.dz[nb] = nrm.z;
+    L.ra[nb] = ri, L.rb[nb] = delta;
+    L.vx[nb] = v[3 * i], L.vy[nb] = v[3 * i + 1], L.vz[nb] = v[3 * i + 2];
+    L.wx[nb] = w[3 * i] * ri, L.wy[nb] = w[3 * i + 1] * ri, L.wz[nb] = w[3 * i + 2] * ri;
+    L.hx[nb] = h[0], L.hy[nb] = h[1], L.hz[nb] = h[2];
+    const ContactCoefficients& cs = sets[wall_coefficient_[k]];
+    for (int c = 0; c < 5; ++c) L.coef[c][nb] = cs.c[c];
+    lane_entry[nb++] = static_cast<std::int32_t>(k);
+    if (nb == ContactLanes::width) flush();
   }
+  if (nb) flush();
 }
 
-void DemSolver::compute_forces(bool update_history) {
-  if (model_.law() == LawKind::linear_spring_dashpot)
-    compute_forces_with<LinearSpringDashpot>(update_history);
-  else
-    compute_forces_with<HertzMindlin>(update_history);
-}
 
 void DemSolver::step() {
   {

@@ -92,9 +92,8 @@ class DemSolver {
  private:
   void rebuild();
   bool needs_rebuild();
+  // The law enters through the per-pair coefficients and the lane kernel's dispatch.
   void compute_forces(bool update_history);
-  template <class Law>
-  void compute_forces_with(bool update_history);
   template <class Law>
   void fill_pair_coefficients();
   void integrate_first();
@@ -115,7 +114,7 @@ class DemSolver {
   std::vector<double> inv_mass_, inv_inertia_;  // owned bodies, refreshed at each rebuild
   // (body, wall slot) pairs within reach of a wall at the last rebuild: no other body can touch a
   // wall before the next one (static walls; bodies move less than skin/2 in between).
-  std::vector<std::int32_t> wall_body_, wall_slot_;
+  std::vector<std::int32_t> wall_body_, wall_slot_, wall_coefficient_;  // + index into coefficient_sets_
   // Kernel mirrors of the body arrays, one cache line or half of one per body, packed each step:
   // a contact then touches 3 lines per partner instead of 7-8 scattered arrays.
   struct alignas(32) KernelGeometry {
