@@ -55,9 +55,9 @@ void DemScene::require_pairs(const std::vector<int>& mats) const {
   for (int a : mats)
     for (int b : mats)
       if (!model.has_pair(a, b))
-        throw InputError("solid.contact.pairs", "",
-                         "needs an entry for materials [" + model.materials()[a].name + ", " +
-                             model.materials()[b].name + "]");
+        throw InputError(
+            "solid.contact.pairs", "",
+            "needs an entry for materials [" + model.materials()[a].name + ", " + model.materials()[b].name + "]");
   dem_->walls().check_pairs(model, mats);
 }
 
@@ -66,7 +66,8 @@ void DemScene::check_health(const DemStats& s, const RunOptions& opt) {
   write_checkpoint(opt.output_dir + "/failure.h5", *dem_, extras());
   std::ostringstream m;
   m << "blow-up at step " << dem_->steps() << ", t = " << dem_->time() << " s: ";
-  if (!s.finite) m << "non-finite body positions or velocities";
+  if (!s.finite)
+    m << "non-finite body positions or velocities";
   else
     m << "overlap of body " << s.max_overlap_body << " reached " << s.max_overlap_ratio
       << " of its radius (run.max_overlap_ratio = " << max_overlap_ratio_ << ")";
@@ -153,8 +154,7 @@ nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolv
           std::printf("step %ld  t %.5g s  KE %.3g J  Z %.2f  max|v| %.3g m/s  %.3g steps/s  wall %.1f s",
                       dem_->steps(), dem_->time(), stats.kinetic_translational + stats.kinetic_rotational,
                       stats.bodies ? 2.0 * stats.contacts / stats.bodies : 0.0, stats.max_speed, rate, wall());
-          if (end_time_)
-            std::printf("  ETA %.0f s", (*end_time_ - dem_->time()) / dem_->dt() / std::max(rate, 1e-9));
+          if (end_time_) std::printf("  ETA %.0f s", (*end_time_ - dem_->time()) / dem_->dt() / std::max(rate, 1e-9));
           std::printf("\n");
           std::fflush(stdout);
         }

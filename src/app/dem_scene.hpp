@@ -41,7 +41,10 @@ class DemScene {
  protected:
   virtual void create_bodies() = 0;
   // Called every run.check_interval of simulated time (collective): true ends the run.
-  virtual bool finished(const DemStats& stats) { (void)stats; return false; }
+  virtual bool finished(const DemStats& stats) {
+    (void)stats;
+    return false;
+  }
   virtual void finish(const RunOptions& options) { (void)options; }
   virtual void quantities(nlohmann::json& q) { (void)q; }
   virtual CheckpointExtras extras() const { return {}; }

@@ -53,13 +53,20 @@ Args parse_args(int argc, char** argv) {
       if (i + 1 >= argc) throw InputError(flag, "", "needs a value");
       return std::string(argv[++i]);
     };
-    if (s == "--set") a.sets.push_back(value("--set"));
-    else if (s.rfind("--set=", 0) == 0) a.sets.push_back(s.substr(6));
-    else if (s == "--output") a.output = value("--output");
-    else if (s == "--restart") a.restart = value("--restart");
-    else if (s == "--quiet") a.quiet = true;
-    else if (!s.empty() && s[0] != '-' && a.case_file.empty()) a.case_file = s;
-    else throw InputError("(command line)", s, std::string("a known option\n") + kUsage);
+    if (s == "--set")
+      a.sets.push_back(value("--set"));
+    else if (s.rfind("--set=", 0) == 0)
+      a.sets.push_back(s.substr(6));
+    else if (s == "--output")
+      a.output = value("--output");
+    else if (s == "--restart")
+      a.restart = value("--restart");
+    else if (s == "--quiet")
+      a.quiet = true;
+    else if (!s.empty() && s[0] != '-' && a.case_file.empty())
+      a.case_file = s;
+    else
+      throw InputError("(command line)", s, std::string("a known option\n") + kUsage);
   }
   return a;
 }

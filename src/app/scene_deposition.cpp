@@ -18,7 +18,8 @@ namespace {
 
 // Counter-based jitter: the same for a given (seed, id) on any rank count.
 double unit_random(std::uint64_t seed, std::uint64_t id, int k) {
-  std::uint64_t z = seed * 0x9E3779B97F4A7C15ULL + id * 0xBF58476D1CE4E5B9ULL + static_cast<std::uint64_t>(k + 1) * 0x94D049BB133111EBULL;
+  std::uint64_t z = seed * 0x9E3779B97F4A7C15ULL + id * 0xBF58476D1CE4E5B9ULL +
+                    static_cast<std::uint64_t>(k + 1) * 0x94D049BB133111EBULL;
   z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
   z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
   z ^= z >> 31;
@@ -27,8 +28,7 @@ double unit_random(std::uint64_t seed, std::uint64_t id, int k) {
 
 class DepositionScene final : public DemScene {
  public:
-  DepositionScene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir)
-      : DemScene(root, comm, case_dir) {
+  DepositionScene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir) : DemScene(root, comm, case_dir) {
     const ConfigNode d = root.section("deposition");
     material_ = dem_->model().material_index(d.text("material"), d.key_path("material"));
     diameter_ = d.real("diameter", Dim::length, Range::positive());
@@ -48,7 +48,8 @@ class DepositionScene final : public DemScene {
       counts_[k] = static_cast<long>(std::floor((region_hi_[k] - region_lo_[k]) / spacing_));
       if (counts_[k] < 1) d.fail("region_max", "a region at least one lattice spacing wide");
     }
-    if (counts_[0] * counts_[1] * counts_[2] > kMaxBodyId) d.fail("region_max", "a region holding fewer than 2^32 grains");
+    if (counts_[0] * counts_[1] * counts_[2] > kMaxBodyId)
+      d.fail("region_max", "a region holding fewer than 2^32 grains");
     settled_energy_ = d.real("settled_kinetic_energy", Dim::energy, Range::positive());
     min_time_ = d.real("min_time", Dim::time, Range::non_negative(), 0.0);
     if (!end_time_) root.section("run").fail("end_time", "is required: the longest the deposition may take");

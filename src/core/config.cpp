@@ -49,20 +49,17 @@ std::string Range::describe(Dim d) const {
   std::string unit = d == Dim::none ? "" : std::string(" ") + si_unit(d);
   const bool has_lo = std::isfinite(lo), has_hi = std::isfinite(hi);
   if (has_lo && has_hi)
-    return std::string("a number in ") + (lo_open ? "(" : "[") + fmt_number(lo) + ", " +
-           fmt_number(hi) + (hi_open ? ")" : "]") + unit;
+    return std::string("a number in ") + (lo_open ? "(" : "[") + fmt_number(lo) + ", " + fmt_number(hi) +
+           (hi_open ? ")" : "]") + unit;
   if (has_lo) return std::string("a number ") + (lo_open ? "> " : ">= ") + fmt_number(lo) + unit;
   if (has_hi) return std::string("a number ") + (hi_open ? "< " : "<= ") + fmt_number(hi) + unit;
   return "a finite number" + unit;
 }
 
-ConfigNode::ConfigNode(std::shared_ptr<ConfigState> state, YAML::Node in, YAML::Node out,
-                       std::string path)
+ConfigNode::ConfigNode(std::shared_ptr<ConfigState> state, YAML::Node in, YAML::Node out, std::string path)
     : state_(std::move(state)), in_(in), out_(out), path_(std::move(path)) {}
 
-std::string ConfigNode::key_path(const std::string& key) const {
-  return path_.empty() ? key : path_ + "." + key;
-}
+std::string ConfigNode::key_path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
 
 void ConfigNode::mark(const std::string& key) const { state_->used.insert(key_path(key)); }
 
@@ -80,8 +77,7 @@ void ConfigNode::fail(const std::string& key, const std::string& allowed) const 
   throw InputError(key_path(key), show(child(key)), allowed);
 }
 
-double ConfigNode::parse_real(const std::string& key, const YAML::Node& n, Dim dim,
-                              Range range) const {
+double ConfigNode::parse_real(const std::string& key, const YAML::Node& n, Dim dim, Range range) const {
   const std::string expected =
       range.describe(dim) + (dim == Dim::none ? "" : " (units accepted: " + accepted_units(dim) + ")");
   if (!n.IsScalar()) throw InputError(key_path(key), show(n), expected);
@@ -224,11 +220,10 @@ Vec3 ConfigNode::vec3(const std::string& key, Dim dim, const Vec3& fallback) con
   return vec3(key, dim);
 }
 
-std::vector<long> ConfigNode::integers(const std::string& key, std::size_t count, long lo,
-                                       long hi) const {
+std::vector<long> ConfigNode::integers(const std::string& key, std::size_t count, long lo, long hi) const {
   mark(key);
-  const std::string allowed = "a list of " + std::to_string(count) + " integers in [" +
-                              std::to_string(lo) + ", " + std::to_string(hi) + "]";
+  const std::string allowed =
+      "a list of " + std::to_string(count) + " integers in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
   const YAML::Node n = child(key);
   if (!n.IsSequence() || n.size() != count) throw InputError(key_path(key), show(n), allowed);
   std::vector<long> v;
@@ -299,8 +294,7 @@ namespace {
 
 void apply_override(YAML::Node root, const std::string& spec) {
   const auto eq = spec.find('=');
-  if (eq == std::string::npos || eq == 0)
-    throw InputError("--set", spec, "the form section.key=value");
+  if (eq == std::string::npos || eq == 0) throw InputError("--set", spec, "the form section.key=value");
   const std::string path = spec.substr(0, eq);
   YAML::Node value;
   try {
@@ -355,13 +349,14 @@ void collect_unused(const YAML::Node& n, const std::string& path, const std::set
   if (n.IsMap()) {
     for (const auto& kv : n) {
       const std::string p = path.empty() ? kv.first.Scalar() : path + "." + kv.first.Scalar();
-      if (!used.count(p)) out.push_back(p);
-      else collect_unused(kv.second, p, used, out);
+      if (!used.count(p))
+        out.push_back(p);
+      else
+        collect_unused(kv.second, p, used, out);
     }
   } else if (n.IsSequence()) {
     for (std::size_t i = 0; i < n.size(); ++i)
-      if (used.count(path + "." + std::to_string(i)))
-        collect_unused(n[i], path + "." + std::to_string(i), used, out);
+      if (used.count(path + "." + std::to_string(i))) collect_unused(n[i], path + "." + std::to_string(i), used, out);
   }
 }
 
@@ -403,9 +398,9 @@ void Config::check_unused() const {
   if (!unused.empty()) {
     std::string list;
     for (const auto& u : unused) list += (list.empty() ? "" : ", ") + u;
-    throw InputError(unused.front(), "",
-                     "is not a key this scene reads (unknown keys: " + list +
-                         "); see the case README for the keys allowed");
+    throw InputError(
+        unused.front(), "",
+        "is not a key this scene reads (unknown keys: " + list + "); see the case README for the keys allowed");
   }
 }
 

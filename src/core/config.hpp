@@ -63,7 +63,7 @@ class ConfigNode {
   ConfigNode section(const std::string& key) const;  // required mapping
   std::optional<ConfigNode> optional_section(const std::string& key) const;
   std::vector<ConfigNode> list(const std::string& key) const;  // sequence of mappings (may be absent)
-  std::vector<std::string> keys() const;                      // keys of this mapping
+  std::vector<std::string> keys() const;                       // keys of this mapping
 
   // Throws InputError for this node's key with the given explanation (for inconsistencies).
   [[noreturn]] void fail(const std::string& key, const std::string& allowed) const;

@@ -25,8 +25,7 @@ std::array<int, 3> Decomposition::choose_dims(int size, const Vec3& extent, std:
     }
   }
   if (best[0] == 0)
-    throw InputError("domain.process_grid", "", "a grid whose product is the rank count " +
-                                                    std::to_string(size));
+    throw InputError("domain.process_grid", "", "a grid whose product is the rank count " + std::to_string(size));
   return best;
 }
 
@@ -44,8 +43,7 @@ Decomposition::Decomposition(MPI_Comm comm, const Vec3& lo, const Vec3& hi, std:
   for (int d = 0; d < 3; ++d) {
     MPI_Cart_shift(cart_, d, 1, &neighbors_[d][0], &neighbors_[d][1]);
     cuts_[d].resize(dims_[d] + 1);
-    for (int i = 0; i <= dims_[d]; ++i)
-      cuts_[d][i] = lo[d] + (hi[d] - lo[d]) * static_cast<double>(i) / dims_[d];
+    for (int i = 0; i <= dims_[d]; ++i) cuts_[d][i] = lo[d] + (hi[d] - lo[d]) * static_cast<double>(i) / dims_[d];
     cuts_[d][dims_[d]] = hi[d];
   }
 }
@@ -54,9 +52,7 @@ Decomposition::~Decomposition() {
   if (cart_ != MPI_COMM_NULL) MPI_Comm_free(&cart_);
 }
 
-Vec3 Decomposition::sub_lo() const {
-  return {cuts_[0][coords_[0]], cuts_[1][coords_[1]], cuts_[2][coords_[2]]};
-}
+Vec3 Decomposition::sub_lo() const { return {cuts_[0][coords_[0]], cuts_[1][coords_[1]], cuts_[2][coords_[2]]}; }
 
 Vec3 Decomposition::sub_hi() const {
   return {cuts_[0][coords_[0] + 1], cuts_[1][coords_[1] + 1], cuts_[2][coords_[2] + 1]};

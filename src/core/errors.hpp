@@ -14,8 +14,7 @@ class InputError : public std::runtime_error {
   const std::string& key() const { return key_; }
 
  private:
-  static std::string format(const std::string& key, const std::string& value,
-                            const std::string& allowed) {
+  static std::string format(const std::string& key, const std::string& value, const std::string& allowed) {
     std::string m = "input error: key '" + key + "'";
     if (!value.empty()) m += " has value '" + value + "'";
     return m + ": " + allowed;

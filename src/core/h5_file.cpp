@@ -10,13 +10,21 @@ namespace {
 template <class T>
 hid_t h5_type();
 template <>
-hid_t h5_type<double>() { return H5T_NATIVE_DOUBLE; }
+hid_t h5_type<double>() {
+  return H5T_NATIVE_DOUBLE;
+}
 template <>
-hid_t h5_type<std::int64_t>() { return H5T_NATIVE_INT64; }
+hid_t h5_type<std::int64_t>() {
+  return H5T_NATIVE_INT64;
+}
 template <>
-hid_t h5_type<std::int32_t>() { return H5T_NATIVE_INT32; }
+hid_t h5_type<std::int32_t>() {
+  return H5T_NATIVE_INT32;
+}
 template <>
-hid_t h5_type<std::uint64_t>() { return H5T_NATIVE_UINT64; }
+hid_t h5_type<std::uint64_t>() {
+  return H5T_NATIVE_UINT64;
+}
 
 void check(herr_t status, const std::string& what) {
   if (status < 0) throw RunError("HDF5: " + what + " failed");

@@ -24,11 +24,8 @@ class PhaseTimers {
 
   class Scope {
    public:
-    Scope(PhaseTimers& t, const char* phase)
-        : timers_(t), phase_(phase), start_(std::chrono::steady_clock::now()) {}
-    ~Scope() {
-      timers_.add(phase_, std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count());
-    }
+    Scope(PhaseTimers& t, const char* phase) : timers_(t), phase_(phase), start_(std::chrono::steady_clock::now()) {}
+    ~Scope() { timers_.add(phase_, std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count()); }
     Scope(const Scope&) = delete;
     Scope& operator=(const Scope&) = delete;
 

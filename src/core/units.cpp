@@ -15,20 +15,34 @@ struct UnitEntry {
 };
 
 constexpr std::array kUnits{
-    UnitEntry{"m", Dim::length, 1.0},          UnitEntry{"cm", Dim::length, 1e-2},
-    UnitEntry{"mm", Dim::length, 1e-3},        UnitEntry{"um", Dim::length, 1e-6},
-    UnitEntry{"s", Dim::time, 1.0},            UnitEntry{"ms", Dim::time, 1e-3},
-    UnitEntry{"us", Dim::time, 1e-6},          UnitEntry{"ns", Dim::time, 1e-9},
-    UnitEntry{"kg", Dim::mass, 1.0},           UnitEntry{"g", Dim::mass, 1e-3},
-    UnitEntry{"kg/m^3", Dim::density, 1.0},    UnitEntry{"g/cm^3", Dim::density, 1e3},
-    UnitEntry{"Pa", Dim::pressure, 1.0},       UnitEntry{"kPa", Dim::pressure, 1e3},
-    UnitEntry{"MPa", Dim::pressure, 1e6},      UnitEntry{"GPa", Dim::pressure, 1e9},
-    UnitEntry{"N/m", Dim::stiffness, 1.0},     UnitEntry{"kN/m", Dim::stiffness, 1e3},
-    UnitEntry{"m/s", Dim::velocity, 1.0},      UnitEntry{"mm/s", Dim::velocity, 1e-3},
-    UnitEntry{"m/s^2", Dim::acceleration, 1.0}, UnitEntry{"J", Dim::energy, 1.0},
-    UnitEntry{"mJ", Dim::energy, 1e-3},        UnitEntry{"uJ", Dim::energy, 1e-6},
-    UnitEntry{"nJ", Dim::energy, 1e-9},        UnitEntry{"N*s/m", Dim::damping, 1.0},
-    UnitEntry{"N.s/m", Dim::damping, 1.0},     UnitEntry{"1/s", Dim::rate, 1.0},
+    UnitEntry{"m", Dim::length, 1.0},
+    UnitEntry{"cm", Dim::length, 1e-2},
+    UnitEntry{"mm", Dim::length, 1e-3},
+    UnitEntry{"um", Dim::length, 1e-6},
+    UnitEntry{"s", Dim::time, 1.0},
+    UnitEntry{"ms", Dim::time, 1e-3},
+    UnitEntry{"us", Dim::time, 1e-6},
+    UnitEntry{"ns", Dim::time, 1e-9},
+    UnitEntry{"kg", Dim::mass, 1.0},
+    UnitEntry{"g", Dim::mass, 1e-3},
+    UnitEntry{"kg/m^3", Dim::density, 1.0},
+    UnitEntry{"g/cm^3", Dim::density, 1e3},
+    UnitEntry{"Pa", Dim::pressure, 1.0},
+    UnitEntry{"kPa", Dim::pressure, 1e3},
+    UnitEntry{"MPa", Dim::pressure, 1e6},
+    UnitEntry{"GPa", Dim::pressure, 1e9},
+    UnitEntry{"N/m", Dim::stiffness, 1.0},
+    UnitEntry{"kN/m", Dim::stiffness, 1e3},
+    UnitEntry{"m/s", Dim::velocity, 1.0},
+    UnitEntry{"mm/s", Dim::velocity, 1e-3},
+    UnitEntry{"m/s^2", Dim::acceleration, 1.0},
+    UnitEntry{"J", Dim::energy, 1.0},
+    UnitEntry{"mJ", Dim::energy, 1e-3},
+    UnitEntry{"uJ", Dim::energy, 1e-6},
+    UnitEntry{"nJ", Dim::energy, 1e-9},
+    UnitEntry{"N*s/m", Dim::damping, 1.0},
+    UnitEntry{"N.s/m", Dim::damping, 1.0},
+    UnitEntry{"1/s", Dim::rate, 1.0},
     UnitEntry{"rad/s", Dim::angular_velocity, 1.0},
 };
 
@@ -36,19 +50,32 @@ constexpr std::array kUnits{
 
 const char* si_unit(Dim d) {
   switch (d) {
-    case Dim::none: return "1";
-    case Dim::length: return "m";
-    case Dim::time: return "s";
-    case Dim::mass: return "kg";
-    case Dim::density: return "kg/m^3";
-    case Dim::pressure: return "Pa";
-    case Dim::stiffness: return "N/m";
-    case Dim::velocity: return "m/s";
-    case Dim::acceleration: return "m/s^2";
-    case Dim::energy: return "J";
-    case Dim::damping: return "N*s/m";
-    case Dim::rate: return "1/s";
-    case Dim::angular_velocity: return "rad/s";
+    case Dim::none:
+      return "1";
+    case Dim::length:
+      return "m";
+    case Dim::time:
+      return "s";
+    case Dim::mass:
+      return "kg";
+    case Dim::density:
+      return "kg/m^3";
+    case Dim::pressure:
+      return "Pa";
+    case Dim::stiffness:
+      return "N/m";
+    case Dim::velocity:
+      return "m/s";
+    case Dim::acceleration:
+      return "m/s^2";
+    case Dim::energy:
+      return "J";
+    case Dim::damping:
+      return "N*s/m";
+    case Dim::rate:
+      return "1/s";
+    case Dim::angular_velocity:
+      return "rad/s";
   }
   return "?";
 }

@@ -53,13 +53,17 @@ TESSERA_CLONES void evaluate_hertz_wall(ContactLanes& lanes, std::size_t count, 
 }  // namespace
 
 void evaluate_contacts(LawKind law, ContactLanes& lanes, std::size_t count, double dt) {
-  if (law == LawKind::linear_spring_dashpot) evaluate_linear(lanes, count, dt);
-  else evaluate_hertz(lanes, count, dt);
+  if (law == LawKind::linear_spring_dashpot)
+    evaluate_linear(lanes, count, dt);
+  else
+    evaluate_hertz(lanes, count, dt);
 }
 
 void evaluate_wall_contacts(LawKind law, ContactLanes& lanes, std::size_t count, double dt) {
-  if (law == LawKind::linear_spring_dashpot) evaluate_linear_wall(lanes, count, dt);
-  else evaluate_hertz_wall(lanes, count, dt);
+  if (law == LawKind::linear_spring_dashpot)
+    evaluate_linear_wall(lanes, count, dt);
+  else
+    evaluate_hertz_wall(lanes, count, dt);
 }
 
 }  // namespace tessera

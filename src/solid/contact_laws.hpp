@@ -28,11 +28,11 @@ namespace tessera {
 
 struct PairParams {
   double normal_stiffness = 0, tangential_stiffness = 0;  // linear law
-  double dn_abs = 0, dn_rate = 0, dn_zeta = 0;             // normal damping D_n parts
-  double dt_abs = 0, dt_rate = 0, dt_zeta = 0;             // tangential damping D_t parts
+  double dn_abs = 0, dn_rate = 0, dn_zeta = 0;            // normal damping D_n parts
+  double dt_abs = 0, dt_rate = 0, dt_zeta = 0;            // tangential damping D_t parts
   double friction = 0;
-  double e_star = 0, g_star = 0, hertz_alpha = 0;          // Hertz-Mindlin
-  double restitution = 1;                                   // as given or implied (reported)
+  double e_star = 0, g_star = 0, hertz_alpha = 0;  // Hertz-Mindlin
+  double restitution = 1;                          // as given or implied (reported)
 };
 
 // Per-pair constants of a law, computed once per neighbour-list build (they depend on the pair's
@@ -64,8 +64,8 @@ struct HertzMindlin {
   static ContactCoefficients coefficients(const PairParams& p, double meff, double reff) {
     const double k_hertz = (4.0 / 3.0) * p.e_star * std::sqrt(reff);
     const double k_mindlin = 8.0 * p.g_star * std::sqrt(reff);
-    return {{k_hertz, p.hertz_alpha * std::sqrt(meff * k_hertz), k_mindlin,
-             p.hertz_alpha * std::sqrt(meff * k_mindlin), p.friction}};
+    return {{k_hertz, p.hertz_alpha * std::sqrt(meff * k_hertz), k_mindlin, p.hertz_alpha * std::sqrt(meff * k_mindlin),
+             p.friction}};
   }
   static void evaluate(const double* c, double delta, double vn, double& fn, double& kt, double& gt) {
     const double sd = std::sqrt(delta), qd = std::sqrt(sd);

@@ -23,8 +23,7 @@ double effective_shear(const Material& a, const Material& b) {
 
 }  // namespace
 
-ContactModel::ContactModel(LawKind law, std::vector<Material> materials)
-    : law_(law), materials_(std::move(materials)) {
+ContactModel::ContactModel(LawKind law, std::vector<Material> materials) : law_(law), materials_(std::move(materials)) {
   table_.assign(materials_.size() * materials_.size(), PairParams{});
   defined_.assign(table_.size(), false);
 }
@@ -86,13 +85,11 @@ PairParams ContactModel::read_pair(const ConfigNode& node, int a, int b) const {
     return hertz_mindlin_pair(materials_[a], materials_[b],
                               node.real("restitution", Dim::none, Range{0.0, 1.0, true, false}), p.friction);
   p.normal_stiffness = node.real("normal_stiffness", Dim::stiffness, Range::positive());
-  p.tangential_stiffness =
-      node.real("tangential_stiffness", Dim::stiffness, Range::non_negative(), p.normal_stiffness);
+  p.tangential_stiffness = node.real("tangential_stiffness", Dim::stiffness, Range::non_negative(), p.normal_stiffness);
   const bool by_e = node.has("restitution"), by_abs = node.has("normal_damping"),
              by_rate = node.has("normal_damping_rate");
   if (by_e + by_abs + by_rate != 1)
-    node.fail("restitution",
-              "exactly one of restitution, normal_damping (N*s/m) or normal_damping_rate (1/s)");
+    node.fail("restitution", "exactly one of restitution, normal_damping (N*s/m) or normal_damping_rate (1/s)");
   if (by_e) {
     p.restitution = node.real("restitution", Dim::none, Range{0.0, 1.0, true, false});
     p.dn_zeta = linear_zeta_for_restitution(p.restitution);
@@ -115,8 +112,7 @@ PairParams ContactModel::read_pair(const ConfigNode& node, int a, int b) const {
   return p;
 }
 
-PairParams ContactModel::hertz_mindlin_pair(const Material& a, const Material& b, double restitution,
-                                            double friction) {
+PairParams ContactModel::hertz_mindlin_pair(const Material& a, const Material& b, double restitution, double friction) {
   PairParams p;
   p.e_star = effective_youngs(a, b);
   p.g_star = effective_shear(a, b);

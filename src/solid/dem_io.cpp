@@ -54,12 +54,17 @@ void write_xdmf(const std::string& path, const std::vector<std::pair<double, std
       << "    <Time Value=\"" << time << "\"/>\n"
       << "    <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n << "\"/>\n"
       << "    <Geometry GeometryType=\"XYZ\">" << item("position", 3) << "</Geometry>\n"
-      << "    <Attribute Name=\"velocity\" AttributeType=\"Vector\" Center=\"Node\">" << item("velocity", 3) << "</Attribute>\n"
-      << "    <Attribute Name=\"angular_velocity\" AttributeType=\"Vector\" Center=\"Node\">" << item("angular_velocity", 3) << "</Attribute>\n"
-      << "    <Attribute Name=\"orientation\" AttributeType=\"Matrix\" Center=\"Node\">" << item("orientation", 4) << "</Attribute>\n"
-      << "    <Attribute Name=\"radius\" AttributeType=\"Scalar\" Center=\"Node\">" << item("radius", 1) << "</Attribute>\n"
+      << "    <Attribute Name=\"velocity\" AttributeType=\"Vector\" Center=\"Node\">" << item("velocity", 3)
+      << "</Attribute>\n"
+      << "    <Attribute Name=\"angular_velocity\" AttributeType=\"Vector\" Center=\"Node\">"
+      << item("angular_velocity", 3) << "</Attribute>\n"
+      << "    <Attribute Name=\"orientation\" AttributeType=\"Matrix\" Center=\"Node\">" << item("orientation", 4)
+      << "</Attribute>\n"
+      << "    <Attribute Name=\"radius\" AttributeType=\"Scalar\" Center=\"Node\">" << item("radius", 1)
+      << "</Attribute>\n"
       << "    <Attribute Name=\"id\" AttributeType=\"Scalar\" Center=\"Node\">" << item("id", 1) << "</Attribute>\n"
-      << "    <Attribute Name=\"shape\" AttributeType=\"Scalar\" Center=\"Node\">" << item("shape", 1) << "</Attribute>\n"
+      << "    <Attribute Name=\"shape\" AttributeType=\"Scalar\" Center=\"Node\">" << item("shape", 1)
+      << "</Attribute>\n"
       << "   </Grid>\n";
   }
   o << "  </Grid>\n </Domain>\n</Xdmf>\n";
@@ -142,8 +147,9 @@ CheckpointExtras read_checkpoint(const std::string& path, DemSolver& dem) {
     throw InputError("restart", path, "a Tessera DEM checkpoint (format tessera-dem-checkpoint-2)");
   ParticleStore& p = dem.particles();
   if (f.attribute_long("wall_slots") != p.wall_slots)
-    throw InputError("restart", path, "a checkpoint made with the same walls as this case (" +
-                                          std::to_string(p.wall_slots) + " wall primitives)");
+    throw InputError(
+        "restart", path,
+        "a checkpoint made with the same walls as this case (" + std::to_string(p.wall_slots) + " wall primitives)");
   int cols = 0;
   const auto state = f.read_all<double>("bodies", cols);
   if (cols != p.packed_size()) throw InputError("restart", path, "a checkpoint with the same body layout");
@@ -173,9 +179,18 @@ void write_lammps_data(const std::string& path, const DemSolver& dem) {
   std::vector<double> rows;
   for (std::size_t i = 0; i < p.owned; ++i) {
     const double vol = 4.0 / 3.0 * std::numbers::pi * std::pow(p.radius[i], 3);
-    const double r[cols] = {static_cast<double>(p.id[i]), static_cast<double>(p.material[i] + 1),
-                            2 * p.radius[i], p.mass[i] / vol, p.x[3 * i], p.x[3 * i + 1], p.x[3 * i + 2],
-                            p.v[3 * i], p.v[3 * i + 1], p.v[3 * i + 2], 0, 0};
+    const double r[cols] = {static_cast<double>(p.id[i]),
+                            static_cast<double>(p.material[i] + 1),
+                            2 * p.radius[i],
+                            p.mass[i] / vol,
+                            p.x[3 * i],
+                            p.x[3 * i + 1],
+                            p.x[3 * i + 2],
+                            p.v[3 * i],
+                            p.v[3 * i + 1],
+                            p.v[3 * i + 2],
+                            0,
+                            0};
     rows.insert(rows.end(), r, r + cols);
     rows.insert(rows.end(), &p.omega[3 * i], &p.omega[3 * i] + 3);
   }
@@ -200,19 +215,21 @@ void write_lammps_data(const std::string& path, const DemSolver& dem) {
   std::ostringstream o;
   o << std::setprecision(17);
   o << "LAMMPS data file written by Tessera (atom_style sphere), t = " << dem.time() << " s\n\n"
-    << n << " atoms\n" << dem.model().material_count() << " atom types\n\n"
-    << lo.x << " " << hi.x << " xlo xhi\n" << lo.y << " " << hi.y << " ylo yhi\n" << lo.z << " " << hi.z
-    << " zlo zhi\n\nAtoms # sphere\n\n";
+    << n << " atoms\n"
+    << dem.model().material_count() << " atom types\n\n"
+    << lo.x << " " << hi.x << " xlo xhi\n"
+    << lo.y << " " << hi.y << " ylo yhi\n"
+    << lo.z << " " << hi.z << " zlo zhi\n\nAtoms # sphere\n\n";
   for (const auto k : order) {
     const double* r = &all[k * stride];
-    o << static_cast<long>(r[0]) << " " << static_cast<int>(r[1]) << " " << r[2] << " " << r[3] << " " << r[4]
-      << " " << r[5] << " " << r[6] << "\n";
+    o << static_cast<long>(r[0]) << " " << static_cast<int>(r[1]) << " " << r[2] << " " << r[3] << " " << r[4] << " "
+      << r[5] << " " << r[6] << "\n";
   }
   o << "\nVelocities\n\n";
   for (const auto k : order) {
     const double* r = &all[k * stride];
-    o << static_cast<long>(r[0]) << " " << r[7] << " " << r[8] << " " << r[9] << " " << r[12] << " " << r[13]
-      << " " << r[14] << "\n";
+    o << static_cast<long>(r[0]) << " " << r[7] << " " << r[8] << " " << r[9] << " " << r[12] << " " << r[13] << " "
+      << r[14] << "\n";
   }
   write_file_atomically(path, o.str());
 }
@@ -280,8 +297,8 @@ long read_lammps_data(const std::string& path, DemSolver& dem, const std::vector
     }
   }
   if (declared >= 0 && declared != static_cast<long>(rows.size()))
-    throw InputError(key, path, std::to_string(declared) + " atoms as its header declares, found " +
-                                    std::to_string(rows.size()));
+    throw InputError(key, path,
+                     std::to_string(declared) + " atoms as its header declares, found " + std::to_string(rows.size()));
   const Vec3 lo = dem.decomposition().global_lo(), hi = dem.decomposition().global_hi();
   for (const auto& [id, row] : rows) {
     for (int d = 0; d < 3; ++d)

@@ -3,11 +3,11 @@
 
 #include <algorithm>
 #include <bit>
-#include <unordered_map>
 #include <cmath>
 #include <numbers>
 #include <numeric>
 #include <string>
+#include <unordered_map>
 
 #include "core/errors.hpp"
 #include "solid/contact_kernel.hpp"
@@ -17,12 +17,16 @@ namespace tessera {
 DemSettings DemSettings::from_config(const ConfigNode& solid) {
   DemSettings s;
   s.gravity = solid.vec3("gravity", Dim::acceleration, s.gravity);
-  if (solid.has("time_step")) s.time_step = solid.real("time_step", Dim::time, Range::positive());
-  else solid.real("time_step", Dim::time, Range::positive(), 0.0);  // 0 in the resolved case = auto
+  if (solid.has("time_step"))
+    s.time_step = solid.real("time_step", Dim::time, Range::positive());
+  else
+    solid.real("time_step", Dim::time, Range::positive(), 0.0);  // 0 in the resolved case = auto
   s.steps_per_contact = solid.real("steps_per_contact", Dim::none, Range::closed(5, 1e6), s.steps_per_contact);
   s.impact_velocity = solid.real("impact_velocity", Dim::velocity, Range::positive(), s.impact_velocity);
-  if (solid.has("neighbor_skin")) s.skin = solid.real("neighbor_skin", Dim::length, Range::positive());
-  else solid.real("neighbor_skin", Dim::length, Range::positive(), 0.0);  // 0 = auto (0.5 r_min)
+  if (solid.has("neighbor_skin"))
+    s.skin = solid.real("neighbor_skin", Dim::length, Range::positive());
+  else
+    solid.real("neighbor_skin", Dim::length, Range::positive(), 0.0);  // 0 = auto (0.5 r_min)
   return s;
 }
 
@@ -66,18 +70,19 @@ void DemSolver::setup(bool fresh) {
     if (used[m]) body_materials.push_back(m);
   for (int a : body_materials)
     for (int b : body_materials)
-      if (!model_.has_pair(a, b)) throw InputError("solid.contact.pairs", "", "an entry for every material pair in use");
+      if (!model_.has_pair(a, b))
+        throw InputError("solid.contact.pairs", "", "an entry for every material pair in use");
   walls_.check_pairs(model_, body_materials);
 
   // Contact duration (T6): the shortest over the pairs in use, for the lightest body.
   t_contact_ = 1e300;
   for (int a : body_materials) {
     for (int b : body_materials)
-      t_contact_ = std::min(t_contact_, model_.contact_duration(a, b, 0.5 * m_min, 0.5 * r_min,
-                                                                settings_.impact_velocity));
+      t_contact_ =
+          std::min(t_contact_, model_.contact_duration(a, b, 0.5 * m_min, 0.5 * r_min, settings_.impact_velocity));
     for (const auto& w : walls_.primitives())
-      t_contact_ = std::min(t_contact_, model_.contact_duration(a, w.material, m_min, r_min,
-                                                                settings_.impact_velocity));
+      t_contact_ =
+          std::min(t_contact_, model_.contact_duration(a, w.material, m_min, r_min, settings_.impact_velocity));
   }
   dt_ = settings_.time_step ? *settings_.time_step : t_contact_ / settings_.steps_per_contact;
   skin_ = settings_.skin ? *settings_.skin : 0.5 * r_min;
@@ -227,8 +232,10 @@ void DemSolver::rebuild() {
         }
       }
     }
-    if (model_.law() == LawKind::linear_spring_dashpot) fill_pair_coefficients<LinearSpringDashpot>();
-    else fill_pair_coefficients<HertzMindlin>();
+    if (model_.law() == LawKind::linear_spring_dashpot)
+      fill_pair_coefficients<LinearSpringDashpot>();
+    else
+      fill_pair_coefficients<HertzMindlin>();
   }
 }
 
@@ -480,7 +487,6 @@ void DemSolver::compute_forces(bool update_history) {
   }
   if (nb) flush();
 }
-
 
 void DemSolver::step() {
   {

@@ -31,10 +31,10 @@ namespace tessera {
 
 struct DemSettings {
   Vec3 gravity{0, 0, -9.81};
-  std::optional<double> time_step;     // none: from the contact duration (T6)
-  double steps_per_contact = 30;       // dt = t_contact / steps_per_contact when automatic
-  double impact_velocity = 1.0;        // reference speed for the Hertz contact duration
-  std::optional<double> skin;          // none: 0.5 r_min
+  std::optional<double> time_step;  // none: from the contact duration (T6)
+  double steps_per_contact = 30;    // dt = t_contact / steps_per_contact when automatic
+  double impact_velocity = 1.0;     // reference speed for the Hertz contact duration
+  std::optional<double> skin;       // none: 0.5 r_min
 
   static DemSettings from_config(const ConfigNode& solid);
 };
@@ -43,11 +43,11 @@ struct DemStats {
   long bodies = 0;
   double kinetic_translational = 0, kinetic_rotational = 0;
   double max_speed = 0;
-  long contacts = 0;       // touching body-body pairs
-  long wall_contacts = 0;  // touching body-wall pairs
+  long contacts = 0;             // touching body-body pairs
+  long wall_contacts = 0;        // touching body-wall pairs
   double max_overlap_ratio = 0;  // largest overlap over the smaller radius (walls: the body's)
   std::int64_t max_overlap_body = -1;
-  bool finite = true;            // every position and velocity finite
+  bool finite = true;  // every position and velocity finite
 };
 
 class DemSolver {
@@ -63,8 +63,8 @@ class DemSolver {
 
   // Adds a sphere if this rank owns its centre (every rank may call it with the same list).
   // density <= 0: the material's density.
-  void add_sphere(std::int64_t id, int material, double radius, const Vec3& x, const Vec3& v,
-                  const Vec3& omega = {}, double density = 0);
+  void add_sphere(std::int64_t id, int material, double radius, const Vec3& x, const Vec3& v, const Vec3& omega = {},
+                  double density = 0);
   // Contact histories to use at the first build (restart).
   void preload_histories(HistoryMap h) { pending_ = std::move(h); }
 

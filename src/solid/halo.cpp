@@ -11,12 +11,11 @@ namespace tessera {
 void Halo::exchange(int send_rank, int recv_rank, const std::vector<double>& out, std::vector<double>& in) {
   MPI_Comm comm = decomp_.comm();
   long n_out = static_cast<long>(out.size()), n_in = 0;
-  MPI_Sendrecv(&n_out, 1, MPI_LONG, send_rank, 11, &n_in, 1, MPI_LONG, recv_rank, 11, comm,
-               MPI_STATUS_IGNORE);
+  MPI_Sendrecv(&n_out, 1, MPI_LONG, send_rank, 11, &n_in, 1, MPI_LONG, recv_rank, 11, comm, MPI_STATUS_IGNORE);
   if (recv_rank == MPI_PROC_NULL) n_in = 0;
   in.resize(static_cast<std::size_t>(n_in));
-  MPI_Sendrecv(out.data(), static_cast<int>(n_out), MPI_DOUBLE, send_rank, 12, in.data(),
-               static_cast<int>(n_in), MPI_DOUBLE, recv_rank, 12, comm, MPI_STATUS_IGNORE);
+  MPI_Sendrecv(out.data(), static_cast<int>(n_out), MPI_DOUBLE, send_rank, 12, in.data(), static_cast<int>(n_in),
+               MPI_DOUBLE, recv_rank, 12, comm, MPI_STATUS_IGNORE);
   if (send_rank != MPI_PROC_NULL) bytes_sent_ += out.size() * sizeof(double);
 }
 
@@ -75,8 +74,7 @@ void Halo::migrate(ParticleStore& p, HistoryMap& histories) {
       exchange(send_rank, recv_rank, hist_out, in_);
       for (std::size_t off = 0; off + 5 <= in_.size(); off += 5) {
         const PairKey key = (static_cast<PairKey>(in_[off]) << 32) | static_cast<PairKey>(in_[off + 1]);
-        if (histories.emplace(key, std::array<double, 3>{in_[off + 2], in_[off + 3], in_[off + 4]}).second &&
-            indexed) {
+        if (histories.emplace(key, std::array<double, 3>{in_[off + 2], in_[off + 3], in_[off + 4]}).second && indexed) {
           by_body.emplace(key_low(key), key);
           by_body.emplace(key_high(key), key);
         }
@@ -103,9 +101,9 @@ void Halo::build_ghosts(ParticleStore& p, double reach_extra) {
         for (std::size_t i = 0; i < candidates; ++i) {
           const double reach = p.radius[i] + reach_extra;
           if (reach >= hi[d] - lo[d])
-            throw RunError("sub-domain width " + std::to_string(hi[d] - lo[d]) + " m along axis " +
-                           std::to_string(d) + " is smaller than the interaction reach " +
-                           std::to_string(reach) + " m: use fewer ranks along that axis");
+            throw RunError("sub-domain width " + std::to_string(hi[d] - lo[d]) + " m along axis " + std::to_string(d) +
+                           " is smaller than the interaction reach " + std::to_string(reach) +
+                           " m: use fewer ranks along that axis");
           const double xd = p.x[3 * i + d];
           if (dir == 0 ? xd < lo[d] + reach : xd >= hi[d] - reach) {
             s.send.push_back(static_cast<std::int32_t>(i));

@@ -40,9 +40,7 @@ void NeighborList::build(const ParticleStore& p, double skin, const HistoryMap& 
     h *= 1.5;
   }
   const double inv_h = 1.0 / h;
-  auto cell_coord = [&](double x, int d) {
-    return std::clamp(static_cast<int>((x - lo[d]) * inv_h), 0, nc[d] - 1);
-  };
+  auto cell_coord = [&](double x, int d) { return std::clamp(static_cast<int>((x - lo[d]) * inv_h), 0, nc[d] - 1); };
   const std::size_t ncell = static_cast<std::size_t>(nc[0]) * nc[1] * nc[2];
   cell_start_.assign(ncell + 1, 0);
   cell_of_.resize(n);
@@ -54,8 +52,8 @@ void NeighborList::build(const ParticleStore& p, double skin, const HistoryMap& 
       cell_of_[i] = -1;
       continue;
     }
-    const int c = (cell_coord(p.x[3 * i + 2], 2) * nc[1] + cell_coord(p.x[3 * i + 1], 1)) * nc[0] +
-                  cell_coord(p.x[3 * i], 0);
+    const int c =
+        (cell_coord(p.x[3 * i + 2], 2) * nc[1] + cell_coord(p.x[3 * i + 1], 1)) * nc[0] + cell_coord(p.x[3 * i], 0);
     cell_of_[i] = c;
     ++cell_start_[c + 1];
   }

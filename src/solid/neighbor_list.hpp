@@ -33,8 +33,8 @@ class NeighborList {
   std::size_t size() const { return first.size(); }
   std::vector<std::int32_t> first, second;  // local indices; order[first] < order[second]
   std::vector<PairKey> keys;
-  std::vector<double> history;              // 3 per pair (xi of eq. 5)
-  std::vector<double> meff;                 // m_a m_b / (m_a + m_b), constant while listed
+  std::vector<double> history;  // 3 per pair (xi of eq. 5)
+  std::vector<double> meff;     // m_a m_b / (m_a + m_b), constant while listed
 
   std::size_t builds = 0;
 

@@ -17,14 +17,14 @@ namespace tessera {
 
 struct ParticleStore {
   // Per body.
-  std::vector<std::int64_t> id;      // global id, unique, stable for the whole run (user-facing)
+  std::vector<std::int64_t> id;  // global id, unique, stable for the whole run (user-facing)
   // Canonical order key, unique, permanent: the body's rank in a Morton (Z-order) sort of the initial
   // positions. Storage, contact orientation (lower key first) and the order forces are summed in
   // follow it: neighbours are close in memory, and the order is the same on every decomposition.
   std::vector<std::int64_t> order;
   std::vector<std::int32_t> material;
-  std::vector<std::int32_t> shape;   // 0 = sphere
-  std::vector<double> radius;        // contact radius (sphere)
+  std::vector<std::int32_t> shape;  // 0 = sphere
+  std::vector<double> radius;       // contact radius (sphere)
   std::vector<double> mass;
   std::vector<double> inertia;       // principal moment (sphere: 2/5 m r^2)
   std::vector<double> x, v, omega;   // 3 per body
@@ -38,8 +38,8 @@ struct ParticleStore {
   std::size_t size() const { return id.size(); }  // owned + ghosts once set up
   void resize(std::size_t n);
   // Appends one body (owned or ghost block must be managed by the caller).
-  std::size_t push_back(std::int64_t gid, int mat, double r, double m, double inertia_moment,
-                        const Vec3& pos, const Vec3& vel, const Vec3& w);
+  std::size_t push_back(std::int64_t gid, int mat, double r, double m, double inertia_moment, const Vec3& pos,
+                        const Vec3& vel, const Vec3& w);
   // Copies every per-body field of body src into slot dst.
   void copy(std::size_t src, std::size_t dst);
   void swap(std::size_t a, std::size_t b);

@@ -20,7 +20,7 @@ struct WallPrimitive {
   Vec3 point, normal;  // plane: point on it, unit normal into the side bodies live on
   Vec3 lo, hi;         // box_outside
   int material = 0;
-  std::string key;     // case-file key, for messages
+  std::string key;  // case-file key, for messages
 
   // Overlap (> 0 when touching) and unit normal from the wall to the sphere centre c.
   double overlap(const Vec3& c, double r, Vec3& n) const {

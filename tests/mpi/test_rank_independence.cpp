@@ -21,15 +21,17 @@ TEST(RankIndependence, ViolentDepositionIsBitwiseIdenticalOn1To4Ranks) {
   ASSERT_EQ(size, 4) << "run under mpirun -n 4";
   const std::string dir = (std::filesystem::temp_directory_path() / "tessera_rank_independence").string();
   const std::vector<std::string> steps{"run.max_steps=3000"};
-  const BodyStates reference = run_scene_on(1, kViolentDeposition, {"run.max_steps=3000", "domain.process_grid=[1,1,1]"}, dir + "/1");
+  const BodyStates reference =
+      run_scene_on(1, kViolentDeposition, {"run.max_steps=3000", "domain.process_grid=[1,1,1]"}, dir + "/1");
   struct Grid {
     int ranks;
     const char* grid;
   };
-  for (const Grid g : {Grid{2, "[2,1,1]"}, Grid{2, "[1,1,2]"}, Grid{4, "[2,2,1]"}, Grid{4, "[1,1,4]"}, Grid{4, "[4,1,1]"}}) {
-    const BodyStates got = run_scene_on(g.ranks, kViolentDeposition,
-                                        {"run.max_steps=3000", std::string("domain.process_grid=") + g.grid},
-                                        dir + "/" + std::to_string(g.ranks) + g.grid);
+  for (const Grid g :
+       {Grid{2, "[2,1,1]"}, Grid{2, "[1,1,2]"}, Grid{4, "[2,2,1]"}, Grid{4, "[1,1,4]"}, Grid{4, "[4,1,1]"}}) {
+    const BodyStates got =
+        run_scene_on(g.ranks, kViolentDeposition, {"run.max_steps=3000", std::string("domain.process_grid=") + g.grid},
+                     dir + "/" + std::to_string(g.ranks) + g.grid);
     if (rank == 0) {
       EXPECT_EQ(got.size(), 1088u);
       EXPECT_EQ(count_differences(reference, got, g.grid), 0) << g.ranks << " ranks, grid " << g.grid;

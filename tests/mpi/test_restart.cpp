@@ -16,11 +16,12 @@ TEST(Restart, ContinuationIsBitwiseIdentical) {
   int size = 1, rank = 0;
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  const std::string dir = (std::filesystem::temp_directory_path() / ("tessera_restart_np" + std::to_string(size))).string();
+  const std::string dir =
+      (std::filesystem::temp_directory_path() / ("tessera_restart_np" + std::to_string(size))).string();
   const BodyStates straight = run_scene_on(size, kViolentDeposition, {"run.max_steps=2000"}, dir + "/straight");
   run_scene_on(size, kViolentDeposition, {"run.max_steps=1100"}, dir + "/first");
-  const BodyStates resumed = run_scene_on(size, kViolentDeposition, {"run.max_steps=2000"}, dir + "/second",
-                                          dir + "/first/checkpoint.h5");
+  const BodyStates resumed =
+      run_scene_on(size, kViolentDeposition, {"run.max_steps=2000"}, dir + "/second", dir + "/first/checkpoint.h5");
   if (rank == 0) {
     EXPECT_EQ(straight.size(), 1088u);
     EXPECT_EQ(count_differences(straight, resumed, "restart"), 0);
@@ -32,7 +33,8 @@ TEST(Restart, CheckpointIsReplacedAtomically) {
   int size = 1, rank = 0;
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  const std::string dir = (std::filesystem::temp_directory_path() / ("tessera_ckpt_np" + std::to_string(size))).string();
+  const std::string dir =
+      (std::filesystem::temp_directory_path() / ("tessera_ckpt_np" + std::to_string(size))).string();
   run_scene_on(size, kViolentDeposition, {"run.max_steps=200", "output.checkpoint_interval=1e-5"}, dir);
   if (rank == 0) {
     EXPECT_TRUE(std::filesystem::exists(dir + "/checkpoint.h5"));

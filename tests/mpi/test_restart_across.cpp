@@ -19,8 +19,8 @@ TEST(Restart, ContinuesOnAnotherRankCount) {
   const std::string dir = (std::filesystem::temp_directory_path() / "tessera_restart_across").string();
   const BodyStates straight = run_scene_on(1, kViolentDeposition, {"run.max_steps=1600"}, dir + "/straight");
   run_scene_on(size, kViolentDeposition, {"run.max_steps=700"}, dir + "/first");
-  const BodyStates resumed = run_scene_on(1, kViolentDeposition, {"run.max_steps=1600"}, dir + "/second",
-                                          dir + "/first/checkpoint.h5");
+  const BodyStates resumed =
+      run_scene_on(1, kViolentDeposition, {"run.max_steps=1600"}, dir + "/second", dir + "/first/checkpoint.h5");
   if (rank == 0) {
     EXPECT_EQ(straight.size(), 1088u);
     EXPECT_EQ(count_differences(straight, resumed, "restart on 1 rank"), 0);

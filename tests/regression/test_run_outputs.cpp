@@ -37,7 +37,7 @@ TEST(RunOutputs, SummaryAndXdmfSnapshotsAreComplete) {
   const fs::path out = fs::temp_directory_path() / "tessera_outputs";
   fs::remove_all(out);
   const auto r = run_shell(std::string(TESSERA_BIN) + " run " + kCase + kSmall + " --set run.max_steps=3000 --output " +
-                         out.string());
+                           out.string());
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("packing_fraction"), std::string::npos) << r.output;  // quantities printed
   std::ifstream in(out / "summary.json");
@@ -81,7 +81,7 @@ TEST(RunOutputs, SigtermWritesCheckpointAndStops) {
   const fs::path out = fs::temp_directory_path() / "tessera_sigterm";
   fs::remove_all(out);
   const auto r = run_shell(std::string(TESSERA_BIN) + " run " + kCase + kSmall + " --output " + out.string() +
-                         " & pid=$!; sleep 3; kill -TERM $pid; wait $pid; echo exit=$?");
+                           " & pid=$!; sleep 3; kill -TERM $pid; wait $pid; echo exit=$?");
   EXPECT_NE(r.output.find("exit=3"), std::string::npos) << r.output;
   EXPECT_TRUE(fs::exists(out / "checkpoint.h5"));
   std::ifstream in(out / "summary.json");

@@ -59,8 +59,7 @@ long count_differences(const BodyStates& a, const BodyStates& b, const char* wha
                       std::memcmp(it->second.data(), s.data(), s.size() * sizeof(double)) == 0;
     if (!same && ++diff <= 3) {
       std::printf("  %s: body %ld differs", what, id);
-      if (it != b.end())
-        std::printf(" (x %.17g vs %.17g)", s[6], it->second[6]);
+      if (it != b.end()) std::printf(" (x %.17g vs %.17g)", s[6], it->second[6]);
       std::printf("\n");
     }
   }

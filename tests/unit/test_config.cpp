@@ -46,7 +46,9 @@ TEST(Config, OutOfRangeAndWrongType) {
   const ConfigNode a = c.root().section("a");
   EXPECT_NE(error_of([&] { a.real("rho", Dim::density, Range::positive()); }).find("> 0"), std::string::npos);
   EXPECT_NE(error_of([&] { a.integer("n", 0, 10); }).find("an integer in [0, 10]"), std::string::npos);
-  EXPECT_NE(error_of([&] { a.choice("law", {"hooke", "hertz_mindlin"}); }).find("one of hooke, hertz_mindlin"),
+  EXPECT_NE(error_of([&] {
+              a.choice("law", {"hooke", "hertz_mindlin"});
+            }).find("one of hooke, hertz_mindlin"),
             std::string::npos);
   EXPECT_NE(error_of([&] { a.vec3("v", Dim::length); }).find("a list of 3 numbers"), std::string::npos);
 }

@@ -48,14 +48,15 @@ TEST(LammpsData, RejectsBodiesOutsideTheBoxAndUnknownTypes) {
   const std::string path = (std::filesystem::temp_directory_path() / "tessera_bad.data").string();
   if (rank == 0) {
     std::ofstream o(path);
-    o << "title\n\n2 atoms\n2 atom types\n\nAtoms # sphere\n\n1 1 0.001 2500 0.005 0.005 0.005\n2 2 0.001 2500 0.5 0.005 0.005\n";
+    o << "title\n\n2 atoms\n2 atom types\n\nAtoms # sphere\n\n1 1 0.001 2500 0.005 0.005 0.005\n2 2 0.001 2500 0.5 "
+         "0.005 0.005\n";
   }
   MPI_Barrier(MPI_COMM_WORLD);
   const Material sand = make_material("sand", 2480);
   ContactModel model(LawKind::linear_spring_dashpot, {sand});
   DemSettings s;
   DemRig r(MPI_COMM_WORLD, {0, 0, 0}, {0.01, 0.01, 0.01}, model, Walls{}, s);
-  EXPECT_THROW(read_lammps_data(path, *r.dem, {0}, "bed.file"), InputError);      // type 2 unmapped
+  EXPECT_THROW(read_lammps_data(path, *r.dem, {0}, "bed.file"), InputError);  // type 2 unmapped
   DemRig r2(MPI_COMM_WORLD, {0, 0, 0}, {0.01, 0.01, 0.01}, model, Walls{}, s);
   EXPECT_THROW(read_lammps_data(path, *r2.dem, {0, 0}, "bed.file"), InputError);  // body 2 outside
 }

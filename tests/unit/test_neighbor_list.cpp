@@ -4,8 +4,8 @@
 // cell size (the bunker's 43 mm ball among 0.6 mm grains) and polydisperse grains.
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <set>
 
 #include "solid/neighbor_list.hpp"
@@ -23,7 +23,8 @@ ParticleStore make_bodies(std::size_t owned, std::size_t ghosts, double big_radi
   const double L = 0.02;
   for (std::size_t i = 0; i < owned + ghosts; ++i) {
     const double r = 3e-4 * (0.8 + 0.6 * rnd());
-    p.push_back(static_cast<std::int64_t>((i * 7919) % 100003), 0, r, 1.0, 1.0, {L * rnd(), L * rnd(), L * rnd()}, {}, {});
+    p.push_back(static_cast<std::int64_t>((i * 7919) % 100003), 0, r, 1.0, 1.0, {L * rnd(), L * rnd(), L * rnd()}, {},
+                {});
   }
   if (big_radius > 0) p.push_back(100500, 0, big_radius, 1.0, 1.0, {0.5 * L, 0.5 * L, 0.5 * L}, {}, {});
   // The big body and the first `owned` bodies are owned: move the big one to the owned block.

@@ -73,8 +73,8 @@ Impact sphere_wall(LawKind law, const Material& sphere, const PairParams& pair, 
 }
 
 // Sphere a (radius Ra) moving at +v toward sphere b (radius Rb) moving at -v along x.
-Impact sphere_sphere(LawKind law, const Material& ma, const Material& mb, const PairParams& pair, double Ra,
-                     double Rb, double v, double dt) {
+Impact sphere_sphere(LawKind law, const Material& ma, const Material& mb, const PairParams& pair, double Ra, double Rb,
+                     double v, double dt) {
   ContactModel model(law, {ma, mb});
   model.set_pair(0, 0, pair);
   model.set_pair(0, 1, pair);
@@ -136,7 +136,8 @@ TEST(ChungOoi, Test1ElasticNormalImpactOfTwoIdenticalSpheres) {
 
 // Test 2: sphere on a rigid plane, R = 0.1 m, 0.2 m/s, aluminium and magnesium alloys.
 TEST(ChungOoi, Test2ElasticNormalImpactOfSphereWithRigidPlane) {
-  for (const auto& mat : {make_material("Al alloy", 2699, 7.0e10, 0.30), make_material("Mg alloy", 1800, 4.0e10, 0.35)}) {
+  for (const auto& mat :
+       {make_material("Al alloy", 2699, 7.0e10, 0.30), make_material("Mg alloy", 1800, 4.0e10, 0.35)}) {
     const double R = 0.10, v = 0.2;
     const PairParams pair = ContactModel::hertz_mindlin_pair(mat, kWallRigid, 1.0, 0.0);
     const HertzTheory ref(pair.e_star, R, sphere_mass(mat, R), v);
@@ -150,7 +151,8 @@ TEST(ChungOoi, Test2ElasticNormalImpactOfSphereWithRigidPlane) {
 // Test 3: normal impact on a rigid plane with restitution 0.2 ... 1.0; the rebound speed over the
 // impact speed must return the input coefficient. R = 2.5 mm, 3.9 m/s.
 TEST(ChungOoi, Test3NormalImpactWithDifferentRestitutionCoefficients) {
-  for (const auto& mat : {make_material("Al oxide", 4000, 3.8e11, 0.23), make_material("cast iron", 7000, 1.0e11, 0.25)}) {
+  for (const auto& mat :
+       {make_material("Al oxide", 4000, 3.8e11, 0.23), make_material("cast iron", 7000, 1.0e11, 0.25)}) {
     for (const double e : {0.2, 0.4, 0.6, 0.8, 1.0}) {
       const double R = 0.0025, v = 3.9;
       const PairParams pair = ContactModel::hertz_mindlin_pair(mat, kWallRigid, e, 0.0);
@@ -205,8 +207,8 @@ TEST(ChungOoi, Test4ObliqueImpactStickingRegimeLinearAnalytic) {
     const double vn = v * std::cos(th), vt = v * std::sin(th);
     const Impact got = sphere_wall(LawKind::linear_spring_dashpot, mat, pair, R, {vt, 0, -vn}, {}, tc / 2000);
     const double contact_tangential = got.v_after.x - R * got.w_after.y;  // w_y > 0 rolls toward +x
-    std::printf("  %2d deg: e_t %.5f (3/7 = %.5f), contact-point velocity ratio %.5f (-1)\n", deg,
-                got.v_after.x / vt, 3.0 / 7.0, contact_tangential / vt);
+    std::printf("  %2d deg: e_t %.5f (3/7 = %.5f), contact-point velocity ratio %.5f (-1)\n", deg, got.v_after.x / vt,
+                3.0 / 7.0, contact_tangential / vt);
     EXPECT_NEAR(got.v_after.x / vt, 3.0 / 7.0, 0.005);
     EXPECT_NEAR(contact_tangential / vt, -1.0, 0.01);
     EXPECT_NEAR(got.v_after.z, vn, 1e-3 * vn);

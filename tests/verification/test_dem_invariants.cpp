@@ -149,7 +149,8 @@ run: {end_time: 0.4, check_interval: 5 ms}
   auto scene = make_scene(c.root(), MPI_COMM_SELF, ".");
   c.check_unused();
   RunOptions opt;
-  opt.output_dir = (std::filesystem::temp_directory_path() / ("tessera_janssen_" + std::to_string(wall_friction))).string();
+  opt.output_dir =
+      (std::filesystem::temp_directory_path() / ("tessera_janssen_" + std::to_string(wall_friction))).string();
   opt.quiet = true;
   std::filesystem::create_directories(opt.output_dir);
   const auto s = scene->run(opt, {});
