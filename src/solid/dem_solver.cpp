@@ -343,105 +343,114 @@ void DemSolver::fill_pair_coefficients() {
 }
 
 void DemSolver::compute_forces(bool update_history) {
-  const std::size_t n = p_.size();
+  // dt = 0 leaves the springs unchanged (the initial forces at set-up).
   const double dt = update_history ? dt_ : 0.0;
+  {
+    auto t = timers_.scope("contact_forces");
+    compute_pair_forces(dt, update_history);
+  }
+  auto t = timers_.scope("wall_forces");
+  compute_wall_forces(dt);
+}
+
+void DemSolver::compute_pair_forces(double dt, bool update_history) {
+  const std::size_t n = p_.size();
   const std::size_t np = list_.size();
   const std::int32_t* first = list_.first.data();
   const std::int32_t* second = list_.second.data();
   double* hist = list_.history.data();
-  {
-    auto t = timers_.scope("contact_forces");
-    k_geometry_.resize(n);
-    k_motion_.resize(n);
-    k_force_.assign(n, KernelForce{0, 0, 0, 0, 0, 0});
-    for (std::size_t i = 0; i < n; ++i) {
-      const double* x = &p_.x[3 * i];
-      const double* v = &p_.v[3 * i];
-      const double* w = &p_.omega[3 * i];
-      k_geometry_[i] = {x[0], x[1], x[2], p_.radius[i]};
-      k_motion_[i] = {v[0], v[1], v[2], w[0], w[1], w[2]};
-    }
-    const KernelGeometry* g = k_geometry_.data();
-    const KernelMotion* m = k_motion_.data();
-    KernelForce* out = k_force_.data();
-    // Pass 1, branch-free: which listed pairs touch (about half of them in a dense bed, at random,
-    // which a branch would mispredict). The compacted list keeps the canonical order.
-    touching_.resize(np);
-    std::size_t nt = 0;
-    constexpr std::size_t ahead = 16;  // prefetch distance: partners are scattered over ~1000 bodies
-    for (std::size_t k = 0; k < np; ++k) {
-      if (k + ahead < np) __builtin_prefetch(&g[second[k + ahead]]);
-      const KernelGeometry& a = g[first[k]];
-      const KernelGeometry& b = g[second[k]];
-      const double dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z, rsum = a.r + b.r;
-      touching_[nt] = static_cast<std::int32_t>(k);
-      nt += (dx * dx + dy * dy + dz * dz < rsum * rsum) ? 1 : 0;
-    }
-    touching_.resize(nt);
-    // Contacts that opened since the last evaluation lose their history (T3).
-    if (update_history) {
-      auto it = touching_.begin();
-      for (const auto k : touching_before_) {
-        while (it != touching_.end() && *it < k) ++it;
-        if (it == touching_.end() || *it != k) hist[3 * k] = hist[3 * k + 1] = hist[3 * k + 2] = 0.0;
-      }
-    }
-    // Pass 2, in blocks: gather the pairs' data into lanes, evaluate the law on all lanes
-    // (vectorised, contact_kernel.cpp), then accumulate forces in canonical order.
-    constexpr std::size_t B = ContactLanes::width;
-    ContactLanes& L = lanes_;
-    const ContactCoefficients* sets = coefficient_sets_.data();
-    const std::int32_t* pc = pair_coefficient_.data();
-    for (std::size_t s = 0; s < nt; s += B) {
-      const std::size_t nb = std::min(B, nt - s);
-      for (std::size_t j = 0; j < nb; ++j) {
-        if (s + j + ahead < nt) {
-          const std::size_t kk = static_cast<std::size_t>(touching_[s + j + ahead]);
-          __builtin_prefetch(&m[second[kk]]);
-          __builtin_prefetch(&out[second[kk]], 1);
-          __builtin_prefetch(&hist[3 * kk], 1);
-        }
-        const std::size_t k = static_cast<std::size_t>(touching_[s + j]);
-        const std::size_t a = first[k], b = second[k];
-        const KernelGeometry &ga = g[a], &gb = g[b];
-        const KernelMotion &ma = m[a], &mb = m[b];
-        L.dx[j] = ga.x - gb.x, L.dy[j] = ga.y - gb.y, L.dz[j] = ga.z - gb.z;
-        L.ra[j] = ga.r, L.rb[j] = gb.r;
-        L.vx[j] = ma.vx - mb.vx, L.vy[j] = ma.vy - mb.vy, L.vz[j] = ma.vz - mb.vz;
-        L.wx[j] = ma.wx * ga.r + mb.wx * gb.r;
-        L.wy[j] = ma.wy * ga.r + mb.wy * gb.r;
-        L.wz[j] = ma.wz * ga.r + mb.wz * gb.r;
-        L.hx[j] = hist[3 * k], L.hy[j] = hist[3 * k + 1], L.hz[j] = hist[3 * k + 2];
-        const ContactCoefficients& cs = sets[pc[k]];
-        for (int c = 0; c < 5; ++c) L.coef[c][j] = cs.c[c];
-      }
-      evaluate_contacts(model_.law(), L, nb, dt);
-      for (std::size_t j = 0; j < nb; ++j) {
-        const std::size_t k = static_cast<std::size_t>(touching_[s + j]);
-        hist[3 * k] = L.hx[j], hist[3 * k + 1] = L.hy[j], hist[3 * k + 2] = L.hz[j];
-        KernelForce &fa = out[first[k]], &fb = out[second[k]];
-        fa.fx += L.fx[j], fa.fy += L.fy[j], fa.fz += L.fz[j];
-        fb.fx -= L.fx[j], fb.fy -= L.fy[j], fb.fz -= L.fz[j];
-        fa.tx -= L.nx[j] * L.ra[j], fa.ty -= L.ny[j] * L.ra[j], fa.tz -= L.nz[j] * L.ra[j];
-        fb.tx -= L.nx[j] * L.rb[j], fb.ty -= L.ny[j] * L.rb[j], fb.tz -= L.nz[j] * L.rb[j];
-      }
-    }
-    if (update_history) touching_before_.swap(touching_);
-    for (std::size_t i = 0; i < p_.owned; ++i) {
-      const KernelForce& fo = out[i];
-      double* f = &p_.f[3 * i];
-      double* tq = &p_.torque[3 * i];
-      f[0] = fo.fx, f[1] = fo.fy, f[2] = fo.fz;
-      tq[0] = fo.tx, tq[1] = fo.ty, tq[2] = fo.tz;
+  k_geometry_.resize(n);
+  k_motion_.resize(n);
+  k_force_.assign(n, KernelForce{0, 0, 0, 0, 0, 0});
+  for (std::size_t i = 0; i < n; ++i) {
+    const double* x = &p_.x[3 * i];
+    const double* v = &p_.v[3 * i];
+    const double* w = &p_.omega[3 * i];
+    k_geometry_[i] = {x[0], x[1], x[2], p_.radius[i]};
+    k_motion_[i] = {v[0], v[1], v[2], w[0], w[1], w[2]};
+  }
+  const KernelGeometry* g = k_geometry_.data();
+  const KernelMotion* m = k_motion_.data();
+  KernelForce* out = k_force_.data();
+  // Pass 1, branch-free: which listed pairs touch (about half of them in a dense bed, at random,
+  // which a branch would mispredict). The compacted list keeps the canonical order.
+  touching_.resize(np);
+  std::size_t nt = 0;
+  constexpr std::size_t ahead = 16;  // prefetch distance: partners are scattered over ~1000 bodies
+  for (std::size_t k = 0; k < np; ++k) {
+    if (k + ahead < np) __builtin_prefetch(&g[second[k + ahead]]);
+    const KernelGeometry& a = g[first[k]];
+    const KernelGeometry& b = g[second[k]];
+    const double dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z, rsum = a.r + b.r;
+    touching_[nt] = static_cast<std::int32_t>(k);
+    nt += (dx * dx + dy * dy + dz * dz < rsum * rsum) ? 1 : 0;
+  }
+  touching_.resize(nt);
+  // Contacts that opened since the last evaluation lose their history (T3).
+  if (update_history) {
+    auto it = touching_.begin();
+    for (const auto k : touching_before_) {
+      while (it != touching_.end() && *it < k) ++it;
+      if (it == touching_.end() || *it != k) hist[3 * k] = hist[3 * k + 1] = hist[3 * k + 2] = 0.0;
     }
   }
+  // Pass 2, in blocks: gather the pairs' data into lanes, evaluate the law on all lanes
+  // (vectorised, contact_kernel.cpp), then accumulate forces in canonical order.
+  constexpr std::size_t B = ContactLanes::width;
+  ContactLanes& L = lanes_;
+  const ContactCoefficients* sets = coefficient_sets_.data();
+  const std::int32_t* pc = pair_coefficient_.data();
+  for (std::size_t s = 0; s < nt; s += B) {
+    const std::size_t nb = std::min(B, nt - s);
+    for (std::size_t j = 0; j < nb; ++j) {
+      if (s + j + ahead < nt) {
+        const std::size_t kk = static_cast<std::size_t>(touching_[s + j + ahead]);
+        __builtin_prefetch(&m[second[kk]]);
+        __builtin_prefetch(&out[second[kk]], 1);
+        __builtin_prefetch(&hist[3 * kk], 1);
+      }
+      const std::size_t k = static_cast<std::size_t>(touching_[s + j]);
+      const std::size_t a = first[k], b = second[k];
+      const KernelGeometry &ga = g[a], &gb = g[b];
+      const KernelMotion &ma = m[a], &mb = m[b];
+      L.dx[j] = ga.x - gb.x, L.dy[j] = ga.y - gb.y, L.dz[j] = ga.z - gb.z;
+      L.ra[j] = ga.r, L.rb[j] = gb.r;
+      L.vx[j] = ma.vx - mb.vx, L.vy[j] = ma.vy - mb.vy, L.vz[j] = ma.vz - mb.vz;
+      L.wx[j] = ma.wx * ga.r + mb.wx * gb.r;
+      L.wy[j] = ma.wy * ga.r + mb.wy * gb.r;
+      L.wz[j] = ma.wz * ga.r + mb.wz * gb.r;
+      L.hx[j] = hist[3 * k], L.hy[j] = hist[3 * k + 1], L.hz[j] = hist[3 * k + 2];
+      const ContactCoefficients& cs = sets[pc[k]];
+      for (int c = 0; c < 5; ++c) L.coef[c][j] = cs.c[c];
+    }
+    evaluate_contacts(model_.law(), L, nb, dt);
+    for (std::size_t j = 0; j < nb; ++j) {
+      const std::size_t k = static_cast<std::size_t>(touching_[s + j]);
+      hist[3 * k] = L.hx[j], hist[3 * k + 1] = L.hy[j], hist[3 * k + 2] = L.hz[j];
+      KernelForce &fa = out[first[k]], &fb = out[second[k]];
+      fa.fx += L.fx[j], fa.fy += L.fy[j], fa.fz += L.fz[j];
+      fb.fx -= L.fx[j], fb.fy -= L.fy[j], fb.fz -= L.fz[j];
+      fa.tx -= L.nx[j] * L.ra[j], fa.ty -= L.ny[j] * L.ra[j], fa.tz -= L.nz[j] * L.ra[j];
+      fb.tx -= L.nx[j] * L.rb[j], fb.ty -= L.ny[j] * L.rb[j], fb.tz -= L.nz[j] * L.rb[j];
+    }
+  }
+  if (update_history) touching_before_.swap(touching_);
+  for (std::size_t i = 0; i < p_.owned; ++i) {
+    const KernelForce& fo = out[i];
+    double* f = &p_.f[3 * i];
+    double* tq = &p_.torque[3 * i];
+    f[0] = fo.fx, f[1] = fo.fy, f[2] = fo.fz;
+    tq[0] = fo.tx, tq[1] = fo.ty, tq[2] = fo.tz;
+  }
+}
+
+void DemSolver::compute_wall_forces(double dt) {
   const double* x = p_.x.data();
   const double* v = p_.v.data();
   const double* w = p_.omega.data();
   const double* rad = p_.radius.data();
   double* f = p_.f.data();
   double* tq = p_.torque.data();
-  auto t = timers_.scope("wall_forces");
   // Walls: bodies near a wall at the last rebuild, in (body, wall) order; same lanes and law.
   const auto& prims = walls_.primitives();
   const std::size_t slots = static_cast<std::size_t>(walls_.slots());

@@ -94,6 +94,8 @@ class DemSolver {
   bool needs_rebuild();
   // The law enters through the per-pair coefficients and the lane kernel's dispatch.
   void compute_forces(bool update_history);
+  void compute_pair_forces(double dt, bool update_history);  // adds into nothing: sets f, torque
+  void compute_wall_forces(double dt);                       // adds to f, torque
   template <class Law>
   void fill_pair_coefficients();
   void integrate_first();
