@@ -91,6 +91,13 @@ nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolv
     create_bodies();
     dem_->setup(true);
   }
+  // Set-up succeeded: only now does the run leave anything on disk.
+  if (root) {
+    fs::create_directories(opt.output_dir);
+    if (!opt.resolved_case_yaml.empty())
+      write_file_atomically(opt.output_dir + "/case.resolved.yaml", opt.resolved_case_yaml);
+  }
+  MPI_Barrier(comm);
   const long start_steps = dem_->steps();
   double loop_seconds = 0;  // the time-step loop only, as LAMMPS' "Loop time"
   MPI_Barrier(comm);

@@ -21,7 +21,8 @@
 namespace tessera {
 
 struct RunOptions {
-  std::string output_dir;
+  std::string output_dir;         // created once set-up has succeeded
+  std::string resolved_case_yaml;  // written there as case.resolved.yaml
   std::optional<std::string> restart;
   bool quiet = false;
 };

@@ -84,13 +84,9 @@ int run(const Args& args, int rank) {
   opt.quiet = args.quiet || std::getenv("CI") != nullptr;
   if (opt.restart && !fs::is_regular_file(*opt.restart))
     throw InputError("--restart", *opt.restart, "an existing checkpoint file");
-  if (rank == 0) {
-    fs::create_directories(opt.output_dir);
-    YAML::Emitter e;
-    e << config.resolved();
-    write_file_atomically(opt.output_dir + "/case.resolved.yaml", std::string(e.c_str()) + "\n");
-  }
-  MPI_Barrier(MPI_COMM_WORLD);
+  YAML::Emitter e;
+  e << config.resolved();
+  opt.resolved_case_yaml = std::string(e.c_str()) + "\n";
   install_stop_signal_handlers();
   const auto summary = scene->run(opt, yaml_to_json(config.resolved()));
   if (rank == 0) {

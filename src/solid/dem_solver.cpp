@@ -86,6 +86,17 @@ void DemSolver::setup(bool fresh) {
   }
   dt_ = settings_.time_step ? *settings_.time_step : t_contact_ / settings_.steps_per_contact;
   skin_ = settings_.skin ? *settings_.skin : 0.5 * r_min;
+  // Ghosts come from face neighbours only: a sub-domain must be wider than the interaction reach.
+  // Every rank sees the same grid and radii, so all stop together here.
+  for (int d = 0; d < 3; ++d) {
+    const auto& cuts = decomp_.cuts(d);
+    for (std::size_t c = 0; c + 1 < cuts.size() && cuts.size() > 2; ++c)
+      if (cuts[c + 1] - cuts[c] <= 2 * r_max_ + skin_)
+        throw InputError("domain.process_grid", "",
+                         "fewer ranks along axis " + std::to_string(d) + ": sub-domains " +
+                             std::to_string(cuts[c + 1] - cuts[c]) + " m wide are narrower than the contact reach " +
+                             std::to_string(2 * r_max_ + skin_) + " m (2 r_max + skin)");
+  }
 
   if (fresh) assign_order();
   rebuild();
