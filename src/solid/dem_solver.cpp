@@ -104,6 +104,7 @@ void DemSolver::setup(bool fresh) {
     // Forces of the initial state for the first half-kick; histories must not advance here.
     const std::vector<double> pair_history = list_.history, wall_history = p_.wall_history;
     compute_forces(false);
+    store_forces();
     list_.history = pair_history;
     p_.wall_history = wall_history;
   }
@@ -194,6 +195,7 @@ void DemSolver::assign_order() {
 }
 
 void DemSolver::rebuild() {
+  owned_mirrors_current_ = false;
   // Histories that must travel: restart entries, and the pairs of bodies about to leave this rank
   // (the new list takes everything else from the old one by a merge of sorted keys).
   HistoryMap histories = std::move(pending_);
@@ -281,6 +283,14 @@ void DemSolver::integrate_first() {
       w[3 * i + k] += h * t[3 * i + k] * inv_i[i];
       x[3 * i + k] += dt * v[3 * i + k];
     }
+  // The contact kernel reads the owned bodies from its mirrors: write them here, while the data is
+  // in cache (a rebuild reorders the bodies and repacks everything).
+  owned_mirrors_current_ = k_geometry_.size() >= n && k_motion_.size() >= n;
+  if (owned_mirrors_current_)
+    for (std::size_t i = 0; i < n; ++i) {
+      k_geometry_[i] = {x[3 * i], x[3 * i + 1], x[3 * i + 2], p_.radius[i]};
+      k_motion_[i] = {v[3 * i], v[3 * i + 1], v[3 * i + 2], w[3 * i], w[3 * i + 1], w[3 * i + 2]};
+    }
   // Orientation: q <- normalize(q + dt/2 (0, w) q). The update changes |q|^2 by O((w dt)^2), so one
   // Newton step of 1/sqrt about 1 normalises to round-off without a square root.
   for (std::size_t i = 0; i < n; ++i) {
@@ -297,20 +307,34 @@ void DemSolver::integrate_first() {
 }
 
 void DemSolver::integrate_second() {
+  // Takes the new forces from the contact buffer (one pass: store F, T and kick).
   const double h = 0.5 * dt_;
   const double g[3] = {settings_.gravity.x, settings_.gravity.y, settings_.gravity.z};
   double* __restrict v = p_.v.data();
   double* __restrict w = p_.omega.data();
-  const double* __restrict f = p_.f.data();
-  const double* __restrict t = p_.torque.data();
+  double* __restrict f = p_.f.data();
+  double* __restrict t = p_.torque.data();
+  const KernelForce* __restrict in = k_force_.data();
   const double* __restrict inv_m = inv_mass_.data();
   const double* __restrict inv_i = inv_inertia_.data();
   const std::size_t n = p_.owned;
-  for (std::size_t i = 0; i < n; ++i)
+  for (std::size_t i = 0; i < n; ++i) {
+    const double fi[3] = {in[i].fx, in[i].fy, in[i].fz}, ti[3] = {in[i].tx, in[i].ty, in[i].tz};
     for (int k = 0; k < 3; ++k) {
-      v[3 * i + k] += h * (f[3 * i + k] * inv_m[i] + g[k]);
-      w[3 * i + k] += h * t[3 * i + k] * inv_i[i];
+      f[3 * i + k] = fi[k];
+      t[3 * i + k] = ti[k];
+      v[3 * i + k] += h * (fi[k] * inv_m[i] + g[k]);
+      w[3 * i + k] += h * ti[k] * inv_i[i];
     }
+  }
+}
+
+void DemSolver::store_forces() {
+  for (std::size_t i = 0; i < p_.owned; ++i) {
+    const KernelForce& fo = k_force_[i];
+    p_.f[3 * i] = fo.fx, p_.f[3 * i + 1] = fo.fy, p_.f[3 * i + 2] = fo.fz;
+    p_.torque[3 * i] = fo.tx, p_.torque[3 * i + 1] = fo.ty, p_.torque[3 * i + 2] = fo.tz;
+  }
 }
 
 template <class Law>
@@ -373,7 +397,8 @@ void DemSolver::compute_pair_forces(double dt, bool update_history) {
   k_geometry_.resize(n);
   k_motion_.resize(n);
   k_force_.assign(n, KernelForce{0, 0, 0, 0, 0, 0});
-  for (std::size_t i = 0; i < n; ++i) {
+  // Owned bodies were packed by integrate_first unless a rebuild moved them; ghosts always here.
+  for (std::size_t i = owned_mirrors_current_ ? p_.owned : 0; i < n; ++i) {
     const double* x = &p_.x[3 * i];
     const double* v = &p_.v[3 * i];
     const double* w = &p_.omega[3 * i];
@@ -446,13 +471,6 @@ void DemSolver::compute_pair_forces(double dt, bool update_history) {
     }
   }
   if (update_history) touching_before_.swap(touching_);
-  for (std::size_t i = 0; i < p_.owned; ++i) {
-    const KernelForce& fo = out[i];
-    double* f = &p_.f[3 * i];
-    double* tq = &p_.torque[3 * i];
-    f[0] = fo.fx, f[1] = fo.fy, f[2] = fo.fz;
-    tq[0] = fo.tx, tq[1] = fo.ty, tq[2] = fo.tz;
-  }
 }
 
 void DemSolver::compute_wall_forces(double dt) {
@@ -460,8 +478,7 @@ void DemSolver::compute_wall_forces(double dt) {
   const double* v = p_.v.data();
   const double* w = p_.omega.data();
   const double* rad = p_.radius.data();
-  double* f = p_.f.data();
-  double* tq = p_.torque.data();
+  KernelForce* out = k_force_.data();
   // Walls: bodies near a wall at the last rebuild, in (body, wall) order; same lanes and law.
   const auto& prims = walls_.primitives();
   const std::size_t slots = static_cast<std::size_t>(walls_.slots());
@@ -477,10 +494,10 @@ void DemSolver::compute_wall_forces(double dt) {
       const std::size_t i = wall_body_[k];
       double* h = &p_.wall_history[3 * (i * slots + wall_slot_[k])];
       h[0] = L.hx[j], h[1] = L.hy[j], h[2] = L.hz[j];
-      const Vec3 force{L.fx[j], L.fy[j], L.fz[j]};
-      force.add_to(f + 3 * i);
-      (Vec3{L.nx[j], L.ny[j], L.nz[j]} * L.ra[j]).subtract_from(tq + 3 * i);
-      wall_force_[wall_slot_[k]] -= force;
+      KernelForce& fo = out[i];
+      fo.fx += L.fx[j], fo.fy += L.fy[j], fo.fz += L.fz[j];
+      fo.tx -= L.nx[j] * L.ra[j], fo.ty -= L.ny[j] * L.ra[j], fo.tz -= L.nz[j] * L.ra[j];
+      wall_force_[wall_slot_[k]] -= Vec3{L.fx[j], L.fy[j], L.fz[j]};
     }
     nb = 0;
   };

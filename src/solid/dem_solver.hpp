@@ -7,6 +7,7 @@
 //   ghost_comm        otherwise: refresh ghost x, v, w
 //   contact_forces    pairs in canonical order (T1-T4), then walls (T7)
 //   integrate_second  v += dt/2 (F/m + g), w += dt/2 T/I                                   (T8)
+//                     (F, T taken from the contact buffer and stored with the body)
 //
 // Velocity Verlet (LAMMPS nve/sphere), second order for conservative forces; the damping and
 // history terms see the half-step velocity.
@@ -94,8 +95,11 @@ class DemSolver {
   bool needs_rebuild();
   // The law enters through the per-pair coefficients and the lane kernel's dispatch.
   void compute_forces(bool update_history);
-  void compute_pair_forces(double dt, bool update_history);  // adds into nothing: sets f, torque
-  void compute_wall_forces(double dt);                       // adds to f, torque
+  // Both accumulate into the contact buffer k_force_; integrate_second (or store_forces) moves the
+  // totals into the bodies' f and torque.
+  void compute_pair_forces(double dt, bool update_history);
+  void compute_wall_forces(double dt);
+  void store_forces();
   template <class Law>
   void fill_pair_coefficients();
   void integrate_first();
@@ -131,6 +135,7 @@ class DemSolver {
   std::vector<KernelGeometry> k_geometry_;
   std::vector<KernelMotion> k_motion_;
   std::vector<KernelForce> k_force_;
+  bool owned_mirrors_current_ = false;  // k_geometry_/k_motion_ of owned bodies packed by integrate_first
   // Law coefficients: a table of the distinct sets (one per material pair for equal bodies) and,
   // per listed pair, an index into it: 4 bytes per pair to stream instead of 40.
   std::vector<ContactCoefficients> coefficient_sets_;
