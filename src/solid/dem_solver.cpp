@@ -277,20 +277,25 @@ void DemSolver::integrate_first() {
   const double* __restrict inv_m = inv_mass_.data();
   const double* __restrict inv_i = inv_inertia_.data();
   const std::size_t n = p_.owned;
-  for (std::size_t i = 0; i < n; ++i)
-    for (int k = 0; k < 3; ++k) {
-      v[3 * i + k] += h * (f[3 * i + k] * inv_m[i] + g[k]);
-      w[3 * i + k] += h * t[3 * i + k] * inv_i[i];
-      x[3 * i + k] += dt * v[3 * i + k];
-    }
-  // The contact kernel reads the owned bodies from its mirrors: write them here, while the data is
-  // in cache (a rebuild reorders the bodies and repacks everything).
+  // The contact kernel reads the owned bodies from its mirrors: they are written here, from
+  // registers (a rebuild reorders the bodies and repacks everything).
   owned_mirrors_current_ = k_geometry_.size() >= n && k_motion_.size() >= n;
-  if (owned_mirrors_current_)
-    for (std::size_t i = 0; i < n; ++i) {
-      k_geometry_[i] = {x[3 * i], x[3 * i + 1], x[3 * i + 2], p_.radius[i]};
-      k_motion_[i] = {v[3 * i], v[3 * i + 1], v[3 * i + 2], w[3 * i], w[3 * i + 1], w[3 * i + 2]};
+  for (std::size_t i = 0; i < n; ++i) {
+    // The body arrays are page-aligned allocations of equal size: a store to v[j] followed by a
+    // load of x[j] would stall (4K aliasing). Load a body's values first, then store.
+    const double a = inv_m[i], b = inv_i[i];
+    double vi[3], wi[3], xi[3];
+    for (int k = 0; k < 3; ++k) {
+      vi[k] = v[3 * i + k] + h * (f[3 * i + k] * a + g[k]);
+      wi[k] = w[3 * i + k] + h * t[3 * i + k] * b;
+      xi[k] = x[3 * i + k] + dt * vi[k];
     }
+    for (int k = 0; k < 3; ++k) v[3 * i + k] = vi[k], w[3 * i + k] = wi[k], x[3 * i + k] = xi[k];
+    if (owned_mirrors_current_) {
+      k_geometry_[i] = {xi[0], xi[1], xi[2], p_.radius[i]};
+      k_motion_[i] = {vi[0], vi[1], vi[2], wi[0], wi[1], wi[2]};
+    }
+  }
   // Orientation: q <- normalize(q + dt/2 (0, w) q). The update changes |q|^2 by O((w dt)^2), so one
   // Newton step of 1/sqrt about 1 normalises to round-off without a square root.
   for (std::size_t i = 0; i < n; ++i) {
@@ -320,12 +325,12 @@ void DemSolver::integrate_second() {
   const std::size_t n = p_.owned;
   for (std::size_t i = 0; i < n; ++i) {
     const double fi[3] = {in[i].fx, in[i].fy, in[i].fz}, ti[3] = {in[i].tx, in[i].ty, in[i].tz};
+    double vi[3], wi[3];  // loads before stores (see integrate_first)
     for (int k = 0; k < 3; ++k) {
-      f[3 * i + k] = fi[k];
-      t[3 * i + k] = ti[k];
-      v[3 * i + k] += h * (fi[k] * inv_m[i] + g[k]);
-      w[3 * i + k] += h * ti[k] * inv_i[i];
+      vi[k] = v[3 * i + k] + h * (fi[k] * inv_m[i] + g[k]);
+      wi[k] = w[3 * i + k] + h * ti[k] * inv_i[i];
     }
+    for (int k = 0; k < 3; ++k) f[3 * i + k] = fi[k], t[3 * i + k] = ti[k], v[3 * i + k] = vi[k], w[3 * i + k] = wi[k];
   }
 }
 
