@@ -79,21 +79,27 @@ void NeighborList::build(const ParticleStore& p, double skin, const HistoryMap& 
                            static_cast<std::int32_t>(a_low ? b : a)});
   };
 
-  // Small-small: 27 cells around each small body, each pair once (from its lower-id end).
-  for (std::size_t i = 0; i < n; ++i) {
-    if (cell_of_[i] < 0) continue;
-    const int c = cell_of_[i];
-    const int cx = c % nc[0], cy = (c / nc[0]) % nc[1], cz = c / (nc[0] * nc[1]);
-    for (int z = std::max(0, cz - 1); z <= std::min(nc[2] - 1, cz + 1); ++z)
-      for (int y = std::max(0, cy - 1); y <= std::min(nc[1] - 1, cy + 1); ++y)
-        for (int x = std::max(0, cx - 1); x <= std::min(nc[0] - 1, cx + 1); ++x) {
+  // Small-small: each pair once, from a half stencil over cells (the cell itself, then the 13
+  // neighbours ahead of it in (z, y, x) order).
+  static constexpr int kHalf[13][3] = {{1, 0, 0},  {-1, 1, 0}, {0, 1, 0},  {1, 1, 0}, {-1, -1, 1},
+                                       {0, -1, 1}, {1, -1, 1}, {-1, 0, 1}, {0, 0, 1}, {1, 0, 1},
+                                       {-1, 1, 1}, {0, 1, 1},  {1, 1, 1}};
+  for (int cz = 0; cz < nc[2]; ++cz)
+    for (int cy = 0; cy < nc[1]; ++cy)
+      for (int cx = 0; cx < nc[0]; ++cx) {
+        const int c = (cz * nc[1] + cy) * nc[0] + cx;
+        const int begin = cell_start_[c], end = cell_start_[c + 1];
+        if (begin == end) continue;
+        for (int u = begin; u < end; ++u)
+          for (int v = u + 1; v < end; ++v) consider(cell_items_[u], cell_items_[v]);
+        for (const auto& o : kHalf) {
+          const int x = cx + o[0], y = cy + o[1], z = cz + o[2];
+          if (x < 0 || y < 0 || z < 0 || x >= nc[0] || y >= nc[1] || z >= nc[2]) continue;
           const int cc = (z * nc[1] + y) * nc[0] + x;
-          for (int k = cell_start_[cc]; k < cell_start_[cc + 1]; ++k) {
-            const auto j = static_cast<std::size_t>(cell_items_[k]);
-            if (p.order[j] > p.order[i]) consider(i, j);
-          }
+          for (int u = begin; u < end; ++u)
+            for (int v = cell_start_[cc]; v < cell_start_[cc + 1]; ++v) consider(cell_items_[u], cell_items_[v]);
         }
-  }
+      }
   // Large-small: each large body scans the cells within its reach.
   for (const auto li : large) {
     const double reach = p.radius[li] + r_ref + skin;
