@@ -50,6 +50,23 @@ class Reader {
   long line_no_ = 0;
 };
 
+// MSH 4.1 sections: "numBlocks numItems minTag maxTag", then per block
+// "entityDim entityTag kind numItemsInBlock" (kind: parametric flag for nodes, type for elements).
+struct Block {
+  int dim = 0, entity = 0, kind = 0;
+  long count = 0;
+};
+long read_block_count(Reader& r) {
+  long blocks = 0, count = 0, min_tag = 0, max_tag = 0;
+  r.parse(r.line(), blocks, count, min_tag, max_tag);
+  return blocks;
+}
+Block read_block(Reader& r) {
+  Block b;
+  r.parse(r.line(), b.dim, b.entity, b.kind, b.count);
+  return b;
+}
+
 int index_of(const std::unordered_map<long, int>& map, long tag, Reader& r) {
   const auto it = map.find(tag);
   if (it == map.end()) r.fail("element refers to unknown node " + std::to_string(tag));
@@ -74,13 +91,9 @@ TetMesh read_gmsh(const std::string& path) {
       r.skip_to("$EndMeshFormat");
     } else if (l == "$Nodes") {
       if (version >= 4.1) {
-        long blocks = 0, count = 0, min_tag = 0, max_tag = 0;
-        r.parse(r.line(), blocks, count, min_tag, max_tag);
-        for (long b = 0; b < blocks; ++b) {
-          int dim = 0, entity = 0, parametric = 0;
-          long n = 0;
-          r.parse(r.line(), dim, entity, parametric, n);
-          std::vector<long> tags(static_cast<std::size_t>(n));
+        for (long blocks = read_block_count(r); blocks > 0; --blocks) {
+          const Block block = read_block(r);
+          std::vector<long> tags(static_cast<std::size_t>(block.count));
           for (auto& t : tags) r.parse(r.line(), t);
           for (const long t : tags) {
             Vec3 x;
@@ -113,14 +126,10 @@ TetMesh read_gmsh(const std::string& path) {
       };
       auto nodes_of = [](int type) { return type == 4 ? 4 : type == 2 ? 3 : type == 1 ? 2 : type == 15 ? 1 : -1; };
       if (version >= 4.1) {
-        long blocks = 0, count = 0, min_tag = 0, max_tag = 0;
-        r.parse(r.line(), blocks, count, min_tag, max_tag);
-        for (long b = 0; b < blocks; ++b) {
-          int dim = 0, entity = 0, type = 0;
-          long n = 0;
-          r.parse(r.line(), dim, entity, type, n);
-          const int nn = nodes_of(type);
-          for (long e = 0; e < n; ++e) {
+        for (long blocks = read_block_count(r); blocks > 0; --blocks) {
+          const Block block = read_block(r);
+          const int type = block.kind, nn = nodes_of(type);
+          for (long e = 0; e < block.count; ++e) {
             const std::string el = r.line();
             if (nn < 0) continue;  // an element type shapes do not use
             std::istringstream s(el);

@@ -15,9 +15,7 @@ namespace tessera::test {
 namespace {
 
 TEST(RankIndependence, ViolentDepositionIsBitwiseIdenticalOn1To4Ranks) {
-  int size = 1, rank = 0;
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  const int size = world_size(), rank = world_rank();
   ASSERT_EQ(size, 4) << "run under mpirun -n 4";
   const std::string dir = (std::filesystem::temp_directory_path() / "tessera_rank_independence").string();
   const std::vector<std::string> steps{"run.max_steps=3000"};

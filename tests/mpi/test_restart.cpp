@@ -13,9 +13,7 @@ namespace tessera::test {
 namespace {
 
 TEST(Restart, ContinuationIsBitwiseIdentical) {
-  int size = 1, rank = 0;
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  const int size = world_size(), rank = world_rank();
   const std::string dir =
       (std::filesystem::temp_directory_path() / ("tessera_restart_np" + std::to_string(size))).string();
   const BodyStates straight = run_scene_on(size, kViolentDeposition, {"run.max_steps=2000"}, dir + "/straight");
@@ -30,9 +28,7 @@ TEST(Restart, ContinuationIsBitwiseIdentical) {
 
 TEST(Restart, CheckpointIsReplacedAtomically) {
   // The checkpoint is written under a temporary name and renamed: no .tmp is left behind.
-  int size = 1, rank = 0;
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  const int size = world_size(), rank = world_rank();
   const std::string dir =
       (std::filesystem::temp_directory_path() / ("tessera_ckpt_np" + std::to_string(size))).string();
   run_scene_on(size, kViolentDeposition, {"run.max_steps=200", "output.checkpoint_interval=1e-5"}, dir);

@@ -12,9 +12,7 @@ namespace {
 // Checkpoints do not depend on the rank count: a run checkpointed on N ranks continues on 1 rank to
 // the same bits as a straight run (results being rank-count independent, see test_rank_independence).
 TEST(Restart, ContinuesOnAnotherRankCount) {
-  int size = 1, rank = 0;
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  const int size = world_size(), rank = world_rank();
   ASSERT_GT(size, 1) << "run under mpirun -n 2 or more";
   const std::string dir = (std::filesystem::temp_directory_path() / "tessera_restart_across").string();
   const BodyStates straight = run_scene_on(1, kViolentDeposition, {"run.max_steps=1600"}, dir + "/straight");

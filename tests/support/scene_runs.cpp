@@ -9,6 +9,18 @@
 
 namespace tessera::test {
 
+int world_rank() {
+  int r = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  return r;
+}
+
+int world_size() {
+  int s = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &s);
+  return s;
+}
+
 BodyStates run_scene_on(int ranks, const std::string& yaml, const std::vector<std::string>& sets,
                         const std::string& output_dir, std::optional<std::string> restart) {
   int world_rank = 0;

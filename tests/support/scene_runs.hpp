@@ -12,6 +12,9 @@
 
 namespace tessera::test {
 
+int world_rank();
+int world_size();
+
 // Full packed state (ParticleStore::pack) of every body, by id; filled on world rank 0 only.
 using BodyStates = std::map<long, std::vector<double>>;
 
