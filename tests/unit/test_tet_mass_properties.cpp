@@ -10,6 +10,7 @@
 
 #include "solid/rigid_rotation.hpp"
 #include "solid/tet_mass_properties.hpp"
+#include "support/meshes.hpp"
 
 namespace tessera {
 namespace {
@@ -62,28 +63,8 @@ TEST(TetMassProperties, RotatedBoxPrincipalMomentsAndAxes) {
   EXPECT_NEAR(dot(cross(mp.principal_axes[0], mp.principal_axes[1]), mp.principal_axes[2]), 1.0, 1e-12);
 }
 
-// Spheroid with semi-axes (L/2, D/2, D/2) as a fan of tetrahedra from its centre to a latitude-
-// longitude surface mesh: the faceted body's volume and inertia converge to 4/3 pi a b c and
-// m (b^2 + c^2) / 5 at second order in the mesh size.
-void spheroid(double ax, double r, int n_lat, std::vector<Vec3>& nodes, std::vector<std::array<int, 4>>& tets) {
-  const int n_lon = 2 * n_lat;
-  nodes = {{0, 0, 0}, {ax, 0, 0}, {-ax, 0, 0}};
-  for (int i = 1; i < n_lat; ++i)
-    for (int j = 0; j < n_lon; ++j) {
-      const double th = std::numbers::pi * i / n_lat, ph = 2 * std::numbers::pi * j / n_lon;
-      nodes.push_back({ax * std::cos(th), r * std::sin(th) * std::cos(ph), r * std::sin(th) * std::sin(ph)});
-    }
-  auto ring = [&](int i, int j) { return 3 + (i - 1) * n_lon + (j % n_lon); };
-  for (int j = 0; j < n_lon; ++j) {
-    tets.push_back({0, 1, ring(1, j), ring(1, j + 1)});
-    tets.push_back({0, 2, ring(n_lat - 1, j), ring(n_lat - 1, j + 1)});
-    for (int i = 1; i + 1 < n_lat; ++i) {
-      tets.push_back({0, ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)});
-      tets.push_back({0, ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)});
-    }
-  }
-}
-
+// The spheroid (tests/support/meshes.hpp): the faceted body's volume and inertia converge to
+// 4/3 pi a b c and m (b^2 + c^2) / 5 at second order in the mesh size.
 TEST(TetMassProperties, SpheroidConvergesAtSecondOrder) {
   const double ax = 0.635e-3, r = 0.26e-3, rho = 2650;  // the seed's grain: 1.27 x 0.52 mm
   const double v_exact = 4.0 / 3.0 * std::numbers::pi * ax * r * r;
@@ -92,7 +73,7 @@ TEST(TetMassProperties, SpheroidConvergesAtSecondOrder) {
   for (int n : {8, 16, 32, 64}) {
     std::vector<Vec3> nodes;
     std::vector<std::array<int, 4>> tets;
-    spheroid(ax, r, n, nodes, tets);
+    test::spheroid_fan(ax, r, n, nodes, tets);
     const MassProperties mp = tet_mass_properties(nodes, tets, rho);
     const double err = std::max({std::fabs(mp.volume / v_exact - 1), std::fabs(mp.principal_moments[0] / i_axial - 1),
                                  std::fabs(mp.principal_moments[2] / i_transverse - 1)});
