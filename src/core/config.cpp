@@ -371,7 +371,6 @@ Config Config::parse(const std::string& yaml_text, const std::vector<std::string
   }
   Config c;
   finish(input, overrides, "(text)", c.state_);
-  c.source_ = "(text)";
   return c;
 }
 
@@ -386,7 +385,6 @@ Config Config::load(const std::string& file, const std::vector<std::string>& ove
   }
   Config c;
   finish(input, overrides, file, c.state_);
-  c.source_ = file;
   return c;
 }
 

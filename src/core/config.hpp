@@ -90,11 +90,9 @@ class Config {
   void check_unused() const;
   // The case as resolved: SI values, defaults filled in.
   YAML::Node resolved() const;
-  const std::string& source() const { return source_; }
 
  private:
   std::shared_ptr<ConfigState> state_;
-  std::string source_;
 };
 
 }  // namespace tessera

@@ -89,6 +89,7 @@ class DemSolver {
   HistoryMap histories() const;
   std::size_t list_builds() const { return list_.builds; }
   std::size_t pair_count() const { return list_.size(); }
+  std::size_t halo_bytes_sent() const { return halo_.bytes_sent(); }  // this rank, whole run
 
  private:
   void rebuild();
