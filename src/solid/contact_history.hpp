@@ -22,4 +22,11 @@ inline std::int64_t key_high(PairKey k) { return static_cast<std::int64_t>(k & 0
 
 constexpr std::int64_t kMaxBodyId = (std::int64_t{1} << 32) - 1;
 
+// Wall contacts of contact spheres keep their history in the same maps: key (element key, base +
+// wall slot). Element keys must stay below the base.
+constexpr std::int64_t kWallKeyBase = (std::int64_t{1} << 32) - 1024;
+inline PairKey wall_key(std::int64_t element_key, int slot) {
+  return (static_cast<PairKey>(element_key) << 32) | static_cast<PairKey>(kWallKeyBase + slot);
+}
+
 }  // namespace tessera

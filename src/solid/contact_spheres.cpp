@@ -42,35 +42,43 @@ ContactSpheres place_contact_spheres(const std::vector<Vec3>& nodes, const std::
   const auto surface = boundary_triangles(nodes, tets);
   std::vector<Vec3> normal(nodes.size());
   std::vector<char> on_surface(nodes.size(), 0);
+  // Candidate anchors: surface nodes (area-weighted normals), then triangle centroids (face normals).
+  std::vector<Vec3> point, dir;
   for (const auto& t : surface) {
     const Vec3 n = cross(nodes[t[1]] - nodes[t[0]], nodes[t[2]] - nodes[t[0]]);  // |n| = 2 area
     for (const int v : t) normal[v] += n, on_surface[v] = 1;
   }
-  std::vector<int> candidates;
   Vec3 centroid;
   for (std::size_t v = 0; v < nodes.size(); ++v)
     if (on_surface[v]) {
-      candidates.push_back(static_cast<int>(v));
+      point.push_back(nodes[v]);
+      dir.push_back(normal[v] / norm(normal[v]));
       centroid += nodes[v];
     }
-  if (count < 1 || count > static_cast<int>(candidates.size()))
-    throw InputError("shape.contact_spheres", std::to_string(count),
-                     "between 1 and the number of surface nodes (" + std::to_string(candidates.size()) + ")");
-  centroid = centroid / static_cast<double>(candidates.size());
-  // Farthest-point sampling: each new anchor is the surface node farthest from those chosen.
-  std::vector<double> gap(candidates.size(), std::numeric_limits<double>::infinity());
+  centroid = centroid / static_cast<double>(point.size());
+  for (const auto& t : surface) {
+    const Vec3 n = cross(nodes[t[1]] - nodes[t[0]], nodes[t[2]] - nodes[t[0]]);
+    point.push_back((nodes[t[0]] + nodes[t[1]] + nodes[t[2]]) / 3.0);
+    dir.push_back(n / norm(n));
+  }
+  if (count < 1 || count > static_cast<int>(point.size()))
+    throw InputError(
+        "shape.contact_spheres", std::to_string(count),
+        "between 1 and the number of surface nodes plus surface triangles (" + std::to_string(point.size()) + ")");
+  // Farthest-point sampling: each new anchor is the candidate farthest from those chosen.
+  std::vector<double> gap(point.size(), std::numeric_limits<double>::infinity());
   std::size_t next = 0;
   double far = -1;
-  for (std::size_t k = 0; k < candidates.size(); ++k)
-    if (const double d = norm2(nodes[candidates[k]] - centroid); d > far) far = d, next = k;
+  for (std::size_t k = 0; k < point.size(); ++k)
+    if (const double d = norm2(point[k] - centroid); d > far) far = d, next = k;
   ContactSpheres out;
   out.radius = radius;
   for (int s = 0; s < count; ++s) {
-    const int v = candidates[next];
-    out.centres.push_back(nodes[v] - normal[v] * (radius / norm(normal[v])));
+    const Vec3 anchor = point[next];
+    out.centres.push_back(anchor - dir[next] * radius);
     double best = -1;
-    for (std::size_t k = 0; k < candidates.size(); ++k) {
-      gap[k] = std::min(gap[k], norm2(nodes[candidates[k]] - nodes[v]));
+    for (std::size_t k = 0; k < point.size(); ++k) {
+      gap[k] = std::min(gap[k], norm2(point[k] - anchor));
       if (gap[k] > best) best = gap[k], next = k;
     }
   }

@@ -3,9 +3,10 @@
 // placed inside the body near its surface, so that the body collides like its surface.
 //
 // Placement (deterministic): the boundary triangles are the tetrahedron faces that appear once; the
-// surface nodes get outward normals (area-weighted means of their triangles' normals); N anchor nodes
-// are chosen by farthest-point sampling over the surface nodes (start: the node farthest from the
-// centroid); each anchor s with normal n carries a sphere of radius rho centred at s - rho n, tangent
+// surface nodes get outward normals (area-weighted means of their triangles' normals), the triangle
+// centroids their face normals; N anchors are chosen by farthest-point sampling over these candidates
+// (start: the surface node farthest from the centroid of the surface nodes); each anchor s with
+// normal n carries a sphere of radius rho centred at s - rho n, tangent
 // to the surface at s from inside.
 // Envelope deviation: for surface points p (nodes and triangle centroids), the gap between the
 // surface and the union of spheres, d(p) = min_i (|p - c_i| - rho): > 0 the surface is not covered
@@ -28,7 +29,7 @@ struct ContactSpheres {
 std::vector<std::array<int, 3>> boundary_triangles(const std::vector<Vec3>& nodes,
                                                    const std::vector<std::array<int, 4>>& tets);
 
-// count spheres of the given radius (count <= number of surface nodes).
+// count spheres of the given radius (count <= surface nodes + surface triangles).
 ContactSpheres place_contact_spheres(const std::vector<Vec3>& nodes, const std::vector<std::array<int, 4>>& tets,
                                      int count, double radius);
 

@@ -118,7 +118,7 @@ void write_checkpoint(const std::string& path, const DemSolver& dem, const Check
     std::vector<double> hist;
     const auto owned_end = p.order.begin() + static_cast<std::ptrdiff_t>(p.owned);
     for (const auto& [key, h] : dem.histories()) {
-      const auto lo = key_low(key);
+      const auto lo = key_low(key) / dem.key_stride();  // the lower element's body
       const auto it = std::lower_bound(p.order.begin(), owned_end, lo);
       if (it == owned_end || *it != lo) continue;
       keys.push_back(key);

@@ -46,13 +46,44 @@ void DemSolver::add_sphere(std::int64_t id, int material, double radius, const V
   p_.owned = p_.size();
 }
 
+void DemSolver::set_shapes(std::vector<ShapeTemplate> templates) {
+  if (p_.size() > 0) throw RunError("DemSolver::set_shapes must come before bodies are added");
+  shapes_ = std::move(templates);
+  key_stride_ = 1;
+  for (const auto& t : shapes_) key_stride_ = std::max<std::int64_t>(key_stride_, std::ssize(t.spheres));
+  if (shaped()) {
+    halo_.forward_orientation = true;
+    halo_.key_stride = key_stride_;
+    p_.wall_slots = 0;  // wall histories are kept per contact sphere, by key
+  }
+}
+
+void DemSolver::add_body(std::int64_t id, int material, int shape, const Vec3& x, const Quaternion& q, const Vec3& v,
+                         const Vec3& omega, double density) {
+  if (id < 0 || id > kMaxBodyId) throw InputError("body id", std::to_string(id), "an id in [0, 2^32)");
+  if (shape < 1 || shape > std::ssize(shapes_))
+    throw InputError("body shape", std::to_string(shape),
+                     "a shape template index in [1, " + std::to_string(shapes_.size()) + "]");
+  if (!decomp_.owns(x)) return;
+  const ShapeTemplate& t = shapes_[shape - 1];
+  const double rho = density > 0 ? density : model_.materials()[material].density;
+  const double m = rho * t.volume;
+  const std::size_t i = p_.push_back(id, material, t.bounding_radius, m, rho * t.inertia_per_density.z, x, v, omega);
+  p_.shape[i] = shape;
+  const double n = std::sqrt(q.norm2());
+  p_.q[4 * i] = q.w / n, p_.q[4 * i + 1] = q.x / n, p_.q[4 * i + 2] = q.y / n, p_.q[4 * i + 3] = q.z / n;
+  p_.owned = p_.size();
+}
+
 void DemSolver::setup(bool fresh) {
   MPI_Comm comm = decomp_.comm();
   double local[3] = {1e300, 1e300, 0};  // min mass, min radius, -max radius
   std::vector<int> used(model_.material_count(), 0);
   for (std::size_t i = 0; i < p_.owned; ++i) {
     local[0] = std::min(local[0], p_.mass[i]);
-    local[1] = std::min(local[1], p_.radius[i]);
+    // Contact radius: the body's, or its template's contact spheres'.
+    const int sh = p_.shape[i];
+    local[1] = std::min(local[1], sh > 0 ? shapes_[sh - 1].sphere_radius : p_.radius[i]);
     local[2] = std::min(local[2], -p_.radius[i]);
     used[p_.material[i]] = 1;
   }
@@ -62,6 +93,9 @@ void DemSolver::setup(bool fresh) {
   long n_local = static_cast<long>(p_.owned), n = 0;
   MPI_Allreduce(&n_local, &n, 1, MPI_LONG, MPI_SUM, comm);
   if (n == 0) throw InputError("bodies", "0", "at least one body in the domain");
+  if (n * key_stride_ >= kWallKeyBase)
+    throw InputError("bodies", std::to_string(n),
+                     "fewer than 2^32 / (contact spheres per body) bodies (element keys are 32-bit)");
   const double m_min = global[0], r_min = global[1];
   r_max_ = -global[2];
 
@@ -113,6 +147,10 @@ void DemSolver::setup(bool fresh) {
 HistoryMap DemSolver::histories() const {
   HistoryMap h;
   list_.collect(h);
+  for (std::size_t k = 0; k < wall_keys_.size(); ++k) {
+    const double* w = &wall_hist_[3 * k];
+    if (w[0] != 0.0 || w[1] != 0.0 || w[2] != 0.0) h[wall_keys_[k]] = {w[0], w[1], w[2]};
+  }
   return h;
 }
 
@@ -205,12 +243,21 @@ void DemSolver::rebuild() {
     bool any = false;
     for (std::size_t i = 0; i < p_.owned; ++i)
       if (!decomp_.owns(p_.pos(i))) leaving[i] = 1, any = true;
-    if (any)
+    // List entries hold elements; an element's body is e_body_ (shaped) or itself.
+    auto body_of = [&](std::int32_t e) { return shaped() ? e_body_[e] : e; };
+    if (any) {
       for (std::size_t k = 0; k < list_.size(); ++k) {
         const double* h = &list_.history[3 * k];
-        if ((leaving[list_.first[k]] || leaving[list_.second[k]]) && (h[0] != 0.0 || h[1] != 0.0 || h[2] != 0.0))
+        if ((leaving[body_of(list_.first[k])] || leaving[body_of(list_.second[k])]) &&
+            (h[0] != 0.0 || h[1] != 0.0 || h[2] != 0.0))
           histories[list_.keys[k]] = {h[0], h[1], h[2]};
       }
+      for (std::size_t k = 0; k < wall_keys_.size(); ++k) {
+        const double* h = &wall_hist_[3 * k];
+        if (leaving[body_of(wall_body_[k])] && (h[0] != 0.0 || h[1] != 0.0 || h[2] != 0.0))
+          histories[wall_keys_[k]] = {h[0], h[1], h[2]};
+      }
+    }
   }
   {
     auto t = timers_.scope("migration");
@@ -223,7 +270,21 @@ void DemSolver::rebuild() {
   }
   {
     auto t = timers_.scope("neighbor");
-    list_.build(p_, skin_, histories);
+    if (shaped()) {
+      build_elements();
+      ContactElements e;
+      e.size = e_body_.size();
+      e.owned = e_owned_;
+      e.x = e_x_.data();
+      e.radius = e_r_.data();
+      e.key = e_key_.data();
+      e.body = e_body_.data();
+      e.body_mass = p_.mass.data();
+      list_.build(e, skin_, histories);
+      e_x_build_.assign(e_x_.begin(), e_x_.begin() + 3 * static_cast<std::ptrdiff_t>(e_owned_));
+    } else {
+      list_.build(p_, skin_, histories);
+    }
     touching_before_.clear();
     for (std::size_t k = 0; k < list_.size(); ++k)
       if (list_.history[3 * k] != 0.0 || list_.history[3 * k + 1] != 0.0 || list_.history[3 * k + 2] != 0.0)
@@ -234,9 +295,16 @@ void DemSolver::rebuild() {
     wall_body_.clear();
     wall_slot_.clear();
     const auto& prims = walls_.primitives();
+    inertia3_.resize(3 * p_.owned);
     for (std::size_t i = 0; i < p_.owned; ++i) {
       inv_mass_[i] = 1.0 / p_.mass[i];
-      inv_inertia_[i] = 1.0 / p_.inertia[i];
+      // Shaped bodies: 0 here, so that the sphere update leaves their w alone (see rotate_shaped).
+      inv_inertia_[i] = p_.shape[i] > 0 ? 0.0 : 1.0 / p_.inertia[i];
+      const int sh = p_.shape[i];
+      for (int k = 0; k < 3; ++k)
+        inertia3_[3 * i + k] =
+            sh > 0 ? p_.mass[i] / shapes_[sh - 1].volume * shapes_[sh - 1].inertia_per_density[k] : p_.inertia[i];
+      if (shaped()) continue;  // walls: per contact sphere, below
       for (std::size_t s = 0; s < prims.size(); ++s) {
         Vec3 n;
         if (prims[s].overlap(p_.pos(i), p_.radius[i] + skin_, n) > 0.0) {
@@ -245,6 +313,7 @@ void DemSolver::rebuild() {
         }
       }
     }
+    if (shaped()) build_wall_list_elements(histories);
     if (model_.law() == LawKind::linear_spring_dashpot)
       fill_pair_coefficients<LinearSpringDashpot>();
     else
@@ -252,11 +321,100 @@ void DemSolver::rebuild() {
   }
 }
 
+void DemSolver::build_elements() {
+  const std::size_t n = p_.size();
+  e_first_.resize(n + 1);
+  e_body_.clear(), e_key_.clear(), e_r_.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    e_first_[i] = e_body_.size();
+    if (i == p_.owned) e_owned_ = e_body_.size();
+    const int sh = p_.shape[i];
+    const std::size_t count = sh > 0 ? shapes_[sh - 1].spheres.size() : 1;
+    const double r = sh > 0 ? shapes_[sh - 1].sphere_radius : p_.radius[i];
+    for (std::size_t k = 0; k < count; ++k) {
+      e_body_.push_back(static_cast<std::int32_t>(i));
+      e_key_.push_back(p_.order[i] * key_stride_ + static_cast<std::int64_t>(k));
+      e_r_.push_back(r);
+    }
+  }
+  e_first_[n] = e_body_.size();
+  if (n == p_.owned) e_owned_ = e_body_.size();
+  e_x_.resize(3 * e_body_.size());
+  e_arm_.resize(3 * e_body_.size());
+  k_geometry_.resize(e_body_.size());
+  k_motion_.resize(e_body_.size());
+  update_elements(0, n);
+}
+
+void DemSolver::update_elements(std::size_t first_body, std::size_t end_body) {
+  // Element e of body i: arm = R(q) c_e, x_e = x + arm, v_e = v + w x arm; the kernel mirrors too.
+  for (std::size_t i = first_body; i < end_body; ++i) {
+    const int sh = p_.shape[i];
+    const Vec3 x = p_.pos(i), v = p_.vel(i), w = p_.ang(i);
+    const Quaternion q{p_.q[4 * i], p_.q[4 * i + 1], p_.q[4 * i + 2], p_.q[4 * i + 3]};
+    const Vec3* centres = sh > 0 ? shapes_[sh - 1].spheres.data() : nullptr;
+    for (std::size_t e = e_first_[i], k = 0; e < e_first_[i + 1]; ++e, ++k) {
+      const Vec3 arm = centres ? q.rotate(centres[k]) : Vec3{};
+      const Vec3 xe = x + arm, ve = v + cross(w, arm);
+      for (int d = 0; d < 3; ++d) e_x_[3 * e + d] = xe[d], e_arm_[3 * e + d] = arm[d];
+      k_geometry_[e] = {xe.x, xe.y, xe.z, e_r_[e]};
+      k_motion_[e] = {ve.x, ve.y, ve.z, w.x, w.y, w.z};
+    }
+  }
+}
+
+void DemSolver::build_wall_list_elements(const HistoryMap& extra) {
+  // (element, wall) entries within reach, in key order (owned elements are in key order), each
+  // with its history from the previous list (merge of sorted keys), else from `extra`, else zero.
+  std::vector<PairKey> old_keys;
+  std::vector<double> old_hist;
+  old_keys.swap(wall_keys_);
+  old_hist.swap(wall_hist_);
+  wall_body_.clear(), wall_slot_.clear();
+  const auto& prims = walls_.primitives();
+  std::size_t old = 0;
+  for (std::size_t e = 0; e < e_owned_; ++e) {
+    const Vec3 xe = Vec3::load(&e_x_[3 * e]);
+    for (std::size_t s = 0; s < prims.size(); ++s) {
+      Vec3 n;
+      if (prims[s].overlap(xe, e_r_[e] + skin_, n) <= 0.0) continue;
+      const PairKey key = wall_key(e_key_[e], static_cast<int>(s));
+      wall_body_.push_back(static_cast<std::int32_t>(e));
+      wall_slot_.push_back(static_cast<std::int32_t>(s));
+      wall_keys_.push_back(key);
+      std::array<double, 3> h{0, 0, 0};
+      while (old < old_keys.size() && old_keys[old] < key) ++old;
+      if (old < old_keys.size() && old_keys[old] == key) {
+        h = {old_hist[3 * old], old_hist[3 * old + 1], old_hist[3 * old + 2]};
+      } else if (const auto it = extra.find(key); it != extra.end()) {
+        h = it->second;
+      }
+      wall_hist_.insert(wall_hist_.end(), h.begin(), h.end());
+    }
+  }
+}
+
+void DemSolver::reduce_element_forces() {
+  // F = sum F_e, T = sum (T_e + arm_e x F_e), element by element (key order: deterministic).
+  b_force_.assign(p_.owned, KernelForce{0, 0, 0, 0, 0, 0});
+  for (std::size_t i = 0; i < p_.owned; ++i) {
+    KernelForce& b = b_force_[i];
+    for (std::size_t e = e_first_[i]; e < e_first_[i + 1]; ++e) {
+      const KernelForce& f = k_force_[e];
+      const Vec3 t = cross(Vec3::load(&e_arm_[3 * e]), Vec3{f.fx, f.fy, f.fz});
+      b.fx += f.fx, b.fy += f.fy, b.fz += f.fz;
+      b.tx += f.tx + t.x, b.ty += f.ty + t.y, b.tz += f.tz + t.z;
+    }
+  }
+}
+
 bool DemSolver::needs_rebuild() {
   double max2 = 0;
-  const double* x = p_.x.data();
-  const double* x0 = x_build_.data();
-  for (std::size_t k = 0; k < 3 * p_.owned; k += 3) {
+  // Shaped bodies: their contact spheres' displacement (translation and rotation).
+  const double* x = shaped() ? e_x_.data() : p_.x.data();
+  const double* x0 = shaped() ? e_x_build_.data() : x_build_.data();
+  const std::size_t n = shaped() ? e_owned_ : p_.owned;
+  for (std::size_t k = 0; k < 3 * n; k += 3) {
     const double dx = x[k] - x0[k], dy = x[k + 1] - x0[k + 1], dz = x[k + 2] - x0[k + 2];
     max2 = std::max(max2, dx * dx + dy * dy + dz * dz);
   }
@@ -279,7 +437,7 @@ void DemSolver::integrate_first() {
   const std::size_t n = p_.owned;
   // The contact kernel reads the owned bodies from its mirrors: they are written here, from
   // registers (a rebuild reorders the bodies and repacks everything).
-  owned_mirrors_current_ = k_geometry_.size() >= n && k_motion_.size() >= n;
+  owned_mirrors_current_ = !shaped() && k_geometry_.size() >= n && k_motion_.size() >= n;
   for (std::size_t i = 0; i < n; ++i) {
     // The body arrays are page-aligned allocations of equal size: a store to v[j] followed by a
     // load of x[j] would stall (4K aliasing). Load a body's values first, then store.
@@ -299,6 +457,10 @@ void DemSolver::integrate_first() {
   // Orientation: q <- normalize(q + dt/2 (0, w) q). The update changes |q|^2 by O((w dt)^2), so one
   // Newton step of 1/sqrt about 1 normalises to round-off without a square root.
   for (std::size_t i = 0; i < n; ++i) {
+    if (shaped() && p_.shape[i] > 0) {
+      rotate_shaped(i, t + 3 * i, h, dt);
+      continue;
+    }
     double* qi = q + 4 * i;
     const double* wi = w + 3 * i;
     const double qw = qi[0], qx = qi[1], qy = qi[2], qz = qi[3];
@@ -319,7 +481,7 @@ void DemSolver::integrate_second() {
   double* __restrict w = p_.omega.data();
   double* __restrict f = p_.f.data();
   double* __restrict t = p_.torque.data();
-  const KernelForce* __restrict in = k_force_.data();
+  const KernelForce* __restrict in = shaped() ? b_force_.data() : k_force_.data();
   const double* __restrict inv_m = inv_mass_.data();
   const double* __restrict inv_i = inv_inertia_.data();
   const std::size_t n = p_.owned;
@@ -332,11 +494,28 @@ void DemSolver::integrate_second() {
     }
     for (int k = 0; k < 3; ++k) f[3 * i + k] = fi[k], t[3 * i + k] = ti[k], v[3 * i + k] = vi[k], w[3 * i + k] = wi[k];
   }
+  if (shaped())
+    for (std::size_t i = 0; i < n; ++i)
+      if (p_.shape[i] > 0) rotate_shaped(i, t + 3 * i, h, 0.0);
+}
+
+void DemSolver::rotate_shaped(std::size_t i, const double* torque, double h, double dt) {
+  // Half-kick of the world angular momentum L = R I R^T w by the torque, then (dt > 0) the free
+  // rotation over dt in the body frame (T9), then w = R I^-1 R^T L.
+  Quaternion q{p_.q[4 * i], p_.q[4 * i + 1], p_.q[4 * i + 2], p_.q[4 * i + 3]};
+  const Vec3 inertia = Vec3::load(&inertia3_[3 * i]);
+  const Vec3 wb = q.unrotate(p_.ang(i));
+  Vec3 lb{inertia.x * wb.x, inertia.y * wb.y, inertia.z * wb.z};
+  lb = q.unrotate(q.rotate(lb) + Vec3::load(torque) * h);
+  if (dt > 0) free_rotation_step(q, lb, inertia, dt);
+  const Vec3 w = q.rotate({lb.x / inertia.x, lb.y / inertia.y, lb.z / inertia.z});
+  for (int k = 0; k < 3; ++k) p_.omega[3 * i + k] = w[k];
+  p_.q[4 * i] = q.w, p_.q[4 * i + 1] = q.x, p_.q[4 * i + 2] = q.y, p_.q[4 * i + 3] = q.z;
 }
 
 void DemSolver::store_forces() {
   for (std::size_t i = 0; i < p_.owned; ++i) {
-    const KernelForce& fo = k_force_[i];
+    const KernelForce& fo = shaped() ? b_force_[i] : k_force_[i];
     p_.f[3 * i] = fo.fx, p_.f[3 * i + 1] = fo.fy, p_.f[3 * i + 2] = fo.fz;
     p_.torque[3 * i] = fo.tx, p_.torque[3 * i + 1] = fo.ty, p_.torque[3 * i + 2] = fo.tz;
   }
@@ -367,18 +546,22 @@ void DemSolver::fill_pair_coefficients() {
     last = key, last_index = it->second;
     return it->second;
   };
+  // Entries hold elements: their radius, and their body's material and mass.
+  const bool sh = shaped();
+  auto radius = [&](std::size_t e) { return sh ? e_r_[e] : p_.radius[e]; };
+  auto body = [&](std::size_t e) { return sh ? static_cast<std::size_t>(e_body_[e]) : e; };
   pair_coefficient_.resize(list_.size());
   for (std::size_t k = 0; k < list_.size(); ++k) {
     const std::size_t a = list_.first[k], b = list_.second[k];
-    const double ra = p_.radius[a], rb = p_.radius[b];
-    pair_coefficient_[k] = lookup({p_.material[a], p_.material[b], list_.meff[k], ra * rb / (ra + rb)});
+    const double ra = radius(a), rb = radius(b);
+    pair_coefficient_[k] = lookup({p_.material[body(a)], p_.material[body(b)], list_.meff[k], ra * rb / (ra + rb)});
   }
   // Walls: m* = m, R* = R (T7).
   const auto& prims = walls_.primitives();
   wall_coefficient_.resize(wall_body_.size());
   for (std::size_t k = 0; k < wall_body_.size(); ++k) {
-    const std::size_t i = wall_body_[k];
-    wall_coefficient_[k] = lookup({p_.material[i], prims[wall_slot_[k]].material, p_.mass[i], p_.radius[i]});
+    const std::size_t e = wall_body_[k];
+    wall_coefficient_[k] = lookup({p_.material[body(e)], prims[wall_slot_[k]].material, p_.mass[body(e)], radius(e)});
   }
 }
 
@@ -389,12 +572,15 @@ void DemSolver::compute_forces(bool update_history) {
     auto t = timers_.scope("contact_forces");
     compute_pair_forces(dt, update_history);
   }
-  auto t = timers_.scope("wall_forces");
-  compute_wall_forces(dt);
+  {
+    auto t = timers_.scope("wall_forces");
+    compute_wall_forces(dt);
+  }
+  if (shaped()) reduce_element_forces();
 }
 
 void DemSolver::compute_pair_forces(double dt, bool update_history) {
-  const std::size_t n = p_.size();
+  const std::size_t n = shaped() ? e_body_.size() : p_.size();
   const std::size_t np = list_.size();
   const std::int32_t* first = list_.first.data();
   const std::int32_t* second = list_.second.data();
@@ -403,7 +589,8 @@ void DemSolver::compute_pair_forces(double dt, bool update_history) {
   k_motion_.resize(n);
   k_force_.assign(n, KernelForce{0, 0, 0, 0, 0, 0});
   // Owned bodies were packed by integrate_first unless a rebuild moved them; ghosts always here.
-  for (std::size_t i = owned_mirrors_current_ ? p_.owned : 0; i < n; ++i) {
+  // (Shaped mode: every element was packed by update_elements.)
+  for (std::size_t i = shaped() ? n : (owned_mirrors_current_ ? p_.owned : 0); i < n; ++i) {
     const double* x = &p_.x[3 * i];
     const double* v = &p_.v[3 * i];
     const double* w = &p_.omega[3 * i];
@@ -479,11 +666,11 @@ void DemSolver::compute_pair_forces(double dt, bool update_history) {
 }
 
 void DemSolver::compute_wall_forces(double dt) {
-  const double* x = p_.x.data();
-  const double* v = p_.v.data();
-  const double* w = p_.omega.data();
-  const double* rad = p_.radius.data();
+  // Entities are elements (bodies for spheres), read from the kernel mirrors packed this step.
+  const KernelGeometry* g = k_geometry_.data();
+  const KernelMotion* m = k_motion_.data();
   KernelForce* out = k_force_.data();
+  const bool sh = shaped();
   // Walls: bodies near a wall at the last rebuild, in (body, wall) order; same lanes and law.
   const auto& prims = walls_.primitives();
   const std::size_t slots = static_cast<std::size_t>(walls_.slots());
@@ -497,7 +684,7 @@ void DemSolver::compute_wall_forces(double dt) {
     for (std::size_t j = 0; j < nb; ++j) {
       const std::size_t k = static_cast<std::size_t>(lane_entry[j]);
       const std::size_t i = wall_body_[k];
-      double* h = &p_.wall_history[3 * (i * slots + wall_slot_[k])];
+      double* h = sh ? &wall_hist_[3 * k] : &p_.wall_history[3 * (i * slots + wall_slot_[k])];
       h[0] = L.hx[j], h[1] = L.hy[j], h[2] = L.hz[j];
       KernelForce& fo = out[i];
       fo.fx += L.fx[j], fo.fy += L.fy[j], fo.fz += L.fz[j];
@@ -509,18 +696,20 @@ void DemSolver::compute_wall_forces(double dt) {
   for (std::size_t k = 0; k < wall_body_.size(); ++k) {
     const std::size_t i = wall_body_[k];
     const std::size_t s = wall_slot_[k];
-    double* h = &p_.wall_history[3 * (i * slots + s)];
+    double* h = sh ? &wall_hist_[3 * k] : &p_.wall_history[3 * (i * slots + s)];
     Vec3 nrm;
-    const double ri = rad[i];
-    const double delta = prims[s].overlap(Vec3::load(x + 3 * i), ri, nrm);
+    const KernelGeometry& gi = g[i];
+    const KernelMotion& mi = m[i];
+    const double ri = gi.r;
+    const double delta = prims[s].overlap(Vec3{gi.x, gi.y, gi.z}, ri, nrm);
     if (delta <= 0.0) {
       h[0] = h[1] = h[2] = 0.0;
       continue;
     }
     L.dx[nb] = nrm.x, L.dy[nb] = nrm.y, L.dz[nb] = nrm.z;
     L.ra[nb] = ri, L.rb[nb] = delta;
-    L.vx[nb] = v[3 * i], L.vy[nb] = v[3 * i + 1], L.vz[nb] = v[3 * i + 2];
-    L.wx[nb] = w[3 * i] * ri, L.wy[nb] = w[3 * i + 1] * ri, L.wz[nb] = w[3 * i + 2] * ri;
+    L.vx[nb] = mi.vx, L.vy[nb] = mi.vy, L.vz[nb] = mi.vz;
+    L.wx[nb] = mi.wx * ri, L.wy[nb] = mi.wy * ri, L.wz[nb] = mi.wz * ri;
     L.hx[nb] = h[0], L.hy[nb] = h[1], L.hz[nb] = h[2];
     const ContactCoefficients& cs = sets[wall_coefficient_[k]];
     for (int c = 0; c < 5; ++c) L.coef[c][nb] = cs.c[c];
@@ -534,12 +723,14 @@ void DemSolver::step() {
   {
     auto t = timers_.scope("integrate");
     integrate_first();
+    if (shaped()) update_elements(0, p_.owned);
   }
   if (needs_rebuild()) {
     rebuild();
   } else {
     auto t = timers_.scope("ghost_comm");
     halo_.forward(p_);
+    if (shaped()) update_elements(p_.owned, p_.size());
   }
   compute_forces(true);
   {
@@ -567,25 +758,37 @@ DemStats DemSolver::stats() const {
     const Vec3 x = p_.pos(i), v = p_.vel(i), w = p_.ang(i);
     if (!std::isfinite(norm2(x) + norm2(v) + norm2(w))) ++c[3];
     e[0] += 0.5 * p_.mass[i] * norm2(v);
-    e[1] += 0.5 * p_.inertia[i] * norm2(w);
+    if (p_.shape[i] > 0) {
+      const Quaternion q{p_.q[4 * i], p_.q[4 * i + 1], p_.q[4 * i + 2], p_.q[4 * i + 3]};
+      const Vec3 wb = q.unrotate(w);
+      for (int k = 0; k < 3; ++k) e[1] += 0.5 * inertia3_[3 * i + k] * wb[k] * wb[k];
+    } else {
+      e[1] += 0.5 * p_.inertia[i] * norm2(w);
+    }
     e[2] = std::max(e[2], norm(v));
   }
+  // Contacts between elements (bodies for spheres): positions and radii of elements.
+  const bool sh = shaped();
+  auto ex = [&](std::size_t a) { return sh ? Vec3::load(&e_x_[3 * a]) : p_.pos(a); };
+  auto er = [&](std::size_t a) { return sh ? e_r_[a] : p_.radius[a]; };
+  auto eid = [&](std::size_t a) { return p_.id[sh ? static_cast<std::size_t>(e_body_[a]) : a]; };
+  const std::size_t owned_elements = sh ? e_owned_ : p_.owned;
   for (std::size_t k = 0; k < list_.size(); ++k) {
     const auto a = static_cast<std::size_t>(list_.first[k]), b = static_cast<std::size_t>(list_.second[k]);
-    if (a >= p_.owned) continue;  // counted by the owner of the lower-id body
-    const double r = norm(p_.pos(a) - p_.pos(b)), rs = p_.radius[a] + p_.radius[b];
+    if (a >= owned_elements) continue;  // counted by the owner of the lower-key element
+    const double r = norm(ex(a) - ex(b)), rs = er(a) + er(b);
     if (r < rs) {
       ++c[1];
-      note_overlap(rs - r, std::min(p_.radius[a], p_.radius[b]), p_.id[a]);
+      note_overlap(rs - r, std::min(er(a), er(b)), eid(a));
     }
   }
-  for (std::size_t i = 0; i < p_.owned; ++i)
+  for (std::size_t i = 0; i < owned_elements; ++i)
     for (const auto& w : walls_.primitives()) {
       Vec3 n;
-      const double overlap = w.overlap(p_.pos(i), p_.radius[i], n);
+      const double overlap = w.overlap(ex(i), er(i), n);
       if (overlap > 0) {
         ++c[2];
-        note_overlap(overlap, p_.radius[i], p_.id[i]);
+        note_overlap(overlap, er(i), eid(i));
       }
     }
   MPI_Comm comm = decomp_.comm();

@@ -11,6 +11,13 @@
 //
 // Velocity Verlet (LAMMPS nve/sphere), second order for conservative forces; the damping and
 // history terms see the half-step velocity.
+//
+// Shaped bodies (shape templates, T13): when the case declares templates, contacts are between
+// contact elements (a sphere body is one element; a shaped body has one per contact sphere, placed
+// at x + R(q) c_s each step, moving with v + w x R(q) c_s). The list, the kernel and the histories
+// work on elements; element forces are then summed into each body's force and torque, element by
+// element in key order. Shaped bodies rotate by the DLM splitting (T9) between the torque
+// half-kicks; spheres keep the update above.
 #pragma once
 #include <mpi.h>
 
@@ -26,6 +33,8 @@
 #include "solid/halo.hpp"
 #include "solid/neighbor_list.hpp"
 #include "solid/particles.hpp"
+#include "solid/rigid_rotation.hpp"
+#include "solid/shape.hpp"
 #include "solid/walls.hpp"
 
 namespace tessera {
@@ -44,8 +53,8 @@ struct DemStats {
   long bodies = 0;
   double kinetic_translational = 0, kinetic_rotational = 0;
   double max_speed = 0;
-  long contacts = 0;             // touching body-body pairs
-  long wall_contacts = 0;        // touching body-wall pairs
+  long contacts = 0;             // touching element pairs (bodies; contact spheres of shaped bodies)
+  long wall_contacts = 0;        // touching element-wall pairs
   double max_overlap_ratio = 0;  // largest overlap over the smaller radius (walls: the body's)
   std::int64_t max_overlap_body = -1;
   bool finite = true;  // every position and velocity finite
@@ -66,6 +75,16 @@ class DemSolver {
   // density <= 0: the material's density.
   void add_sphere(std::int64_t id, int material, double radius, const Vec3& x, const Vec3& v, const Vec3& omega = {},
                   double density = 0);
+  // Shape templates (shape k >= 1 is templates[k - 1]); call before adding shaped bodies. Every rank
+  // must pass the same list.
+  void set_shapes(std::vector<ShapeTemplate> templates);
+  const std::vector<ShapeTemplate>& shapes() const { return shapes_; }
+  bool shaped() const { return !shapes_.empty(); }
+  // Adds a body of template `shape` (>= 1) if this rank owns its centre; q maps body to world.
+  void add_body(std::int64_t id, int material, int shape, const Vec3& x, const Quaternion& q, const Vec3& v,
+                const Vec3& omega = {}, double density = 0);
+  // History keys are element keys: body order * key_stride() + sphere index (1 without templates).
+  std::int64_t key_stride() const { return key_stride_; }
   // Contact histories to use at the first build (restart).
   void preload_histories(HistoryMap h) { pending_ = std::move(h); }
 
@@ -107,6 +126,12 @@ class DemSolver {
   void integrate_second();
   void sort_owned_by_order();
   void assign_order();
+  // Shaped mode: element arrays of every local body (after ghosts), and their positions/mirrors.
+  void build_elements();
+  void update_elements(std::size_t first_body, std::size_t end_body);
+  void build_wall_list_elements(const HistoryMap& extra);
+  void reduce_element_forces();
+  void rotate_shaped(std::size_t i, const double* torque, double h, double dt);
 
   const Decomposition& decomp_;
   ContactModel model_;
@@ -145,6 +170,19 @@ class DemSolver {
   // Listed pairs touching now and at the previous force evaluation (ascending list indices).
   std::vector<std::int32_t> touching_, touching_before_;
   std::vector<Vec3> wall_force_;
+  // Shaped mode.
+  std::vector<ShapeTemplate> shapes_;
+  std::int64_t key_stride_ = 1;
+  std::vector<std::int32_t> e_body_;  // local body of each element
+  std::vector<std::int64_t> e_key_;
+  std::vector<double> e_x_, e_r_, e_arm_;  // position, radius, R(q) c (3, 1, 3 per element)
+  std::vector<std::size_t> e_first_;       // per local body: its first element (size bodies + 1)
+  std::size_t e_owned_ = 0;
+  std::vector<double> e_x_build_;
+  std::vector<double> inertia3_;    // owned bodies: principal moments (3 each)
+  std::vector<PairKey> wall_keys_;  // per wall entry (wall_body_ then holds the element)
+  std::vector<double> wall_hist_;   // 3 per wall entry
+  std::vector<KernelForce> b_force_;
   double dt_ = 0, time_ = 0, skin_ = 0, r_max_ = 0, t_contact_ = 0;
   long steps_ = 0;
 };

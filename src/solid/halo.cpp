@@ -27,6 +27,10 @@ void Halo::migrate(ParticleStore& p, HistoryMap& histories) {
   // Which history entries involve a body: built once, extended with what arrives.
   std::unordered_multimap<std::int64_t, PairKey> by_body;
   bool indexed = false;
+  auto index_key = [&](PairKey key) {
+    by_body.emplace(key_low(key) / key_stride, key);
+    if (key_high(key) < kWallKeyBase) by_body.emplace(key_high(key) / key_stride, key);
+  };
 
   for (int d = 0; d < 3; ++d) {
     if (decomp_.dims()[d] == 1) continue;
@@ -45,10 +49,7 @@ void Halo::migrate(ParticleStore& p, HistoryMap& histories) {
         p.pack(i, out_);
         if (!indexed) {
           by_body.reserve(2 * histories.size());
-          for (const auto& [key, h] : histories) {
-            by_body.emplace(key_low(key), key);
-            by_body.emplace(key_high(key), key);
-          }
+          for (const auto& [key, h] : histories) index_key(key);
           indexed = true;
         }
         const auto range = by_body.equal_range(p.order[i]);
@@ -74,10 +75,8 @@ void Halo::migrate(ParticleStore& p, HistoryMap& histories) {
       exchange(send_rank, recv_rank, hist_out, in_);
       for (std::size_t off = 0; off + 5 <= in_.size(); off += 5) {
         const PairKey key = (static_cast<PairKey>(in_[off]) << 32) | static_cast<PairKey>(in_[off + 1]);
-        if (histories.emplace(key, std::array<double, 3>{in_[off + 2], in_[off + 3], in_[off + 4]}).second && indexed) {
-          by_body.emplace(key_low(key), key);
-          by_body.emplace(key_high(key), key);
-        }
+        if (histories.emplace(key, std::array<double, 3>{in_[off + 2], in_[off + 3], in_[off + 4]}).second && indexed)
+          index_key(key);
       }
     }
   }
@@ -124,14 +123,18 @@ void Halo::build_ghosts(ParticleStore& p, double reach_extra) {
 void Halo::forward(ParticleStore& p) {
   MPI_Comm comm = decomp_.comm();
   for (const auto& s : swaps_) {
-    out_.resize(s.send.size() * ParticleStore::forward_size);
+    const bool rot = forward_orientation;
+    const std::size_t stride = ParticleStore::forward_size + (rot ? 4 : 0);
+    out_.resize(s.send.size() * stride);
     double* o = out_.data();
     for (const auto i : s.send) {
       for (int k = 0; k < 3; ++k) *o++ = p.x[3 * i + k];
       for (int k = 0; k < 3; ++k) *o++ = p.v[3 * i + k];
       for (int k = 0; k < 3; ++k) *o++ = p.omega[3 * i + k];
+      if (rot)
+        for (int k = 0; k < 4; ++k) *o++ = p.q[4 * i + k];
     }
-    in_.resize(s.recv_count * ParticleStore::forward_size);
+    in_.resize(s.recv_count * stride);
     MPI_Sendrecv(out_.data(), static_cast<int>(out_.size()), MPI_DOUBLE, s.send_rank, 13, in_.data(),
                  static_cast<int>(in_.size()), MPI_DOUBLE, s.recv_rank, 13, comm, MPI_STATUS_IGNORE);
     if (s.send_rank != MPI_PROC_NULL) bytes_sent_ += out_.size() * sizeof(double);
@@ -141,6 +144,8 @@ void Halo::forward(ParticleStore& p) {
       for (int c = 0; c < 3; ++c) p.x[3 * i + c] = *in++;
       for (int c = 0; c < 3; ++c) p.v[3 * i + c] = *in++;
       for (int c = 0; c < 3; ++c) p.omega[3 * i + c] = *in++;
+      if (rot)
+        for (int c = 0; c < 4; ++c) p.q[4 * i + c] = *in++;
     }
   }
 }

@@ -41,6 +41,11 @@ class Halo {
 
   std::size_t bytes_sent() const { return bytes_sent_; }
 
+  // Shaped bodies: ghosts also need their orientation every step, and history keys are element
+  // keys (body order * key_stride + sphere index; wall entries have a high part >= kWallKeyBase).
+  bool forward_orientation = false;
+  std::int64_t key_stride = 1;
+
  private:
   struct Swap {
     int dim = 0, send_rank = 0, recv_rank = 0;

@@ -8,8 +8,19 @@
 namespace tessera {
 
 void NeighborList::build(const ParticleStore& p, double skin, const HistoryMap& extra) {
+  ContactElements e;
+  e.size = p.size();
+  e.owned = p.owned;
+  e.x = p.x.data();
+  e.radius = p.radius.data();
+  e.key = p.order.data();
+  e.body_mass = p.mass.data();
+  build(e, skin, extra);
+}
+
+void NeighborList::build(const ContactElements& p, double skin, const HistoryMap& extra) {
   ++builds;
-  const std::size_t n = p.size();
+  const std::size_t n = p.size;
   candidates_.clear();
   previous_keys_.swap(keys);
   previous_history_.swap(history);
@@ -65,8 +76,10 @@ void NeighborList::build(const ParticleStore& p, double skin, const HistoryMap& 
   }
 
   const std::size_t owned = p.owned;
+  const std::int32_t* body = p.body;
   auto consider = [&](std::size_t a, std::size_t b) {
     if (a >= owned && b >= owned) return;
+    if (body && body[a] == body[b]) return;
     double r2 = 0;
     for (int d = 0; d < 3; ++d) {
       const double dx = p.x[3 * a + d] - p.x[3 * b + d];
@@ -74,8 +87,8 @@ void NeighborList::build(const ParticleStore& p, double skin, const HistoryMap& 
     }
     const double cut = p.radius[a] + p.radius[b] + skin;
     if (r2 >= cut * cut) return;
-    const bool a_low = p.order[a] < p.order[b];
-    candidates_.push_back({pair_key(p.order[a], p.order[b]), static_cast<std::int32_t>(a_low ? a : b),
+    const bool a_low = p.key[a] < p.key[b];
+    candidates_.push_back({pair_key(p.key[a], p.key[b]), static_cast<std::int32_t>(a_low ? a : b),
                            static_cast<std::int32_t>(a_low ? b : a)});
   };
 
@@ -129,7 +142,9 @@ void NeighborList::build(const ParticleStore& p, double skin, const HistoryMap& 
     first[k] = candidates_[k].a;
     second[k] = candidates_[k].b;
     keys[k] = candidates_[k].key;
-    const double ma = p.mass[first[k]], mb = p.mass[second[k]];
+    const std::size_t ba = body ? static_cast<std::size_t>(body[first[k]]) : static_cast<std::size_t>(first[k]);
+    const std::size_t bb = body ? static_cast<std::size_t>(body[second[k]]) : static_cast<std::size_t>(second[k]);
+    const double ma = p.body_mass[ba], mb = p.body_mass[bb];
     meff[k] = ma * mb / (ma + mb);
     while (old < n_old && previous_keys_[old] < keys[k]) ++old;
     if (old < n_old && previous_keys_[old] == keys[k]) {

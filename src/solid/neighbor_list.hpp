@@ -21,8 +21,21 @@
 
 namespace tessera {
 
+// What the list is built over: contact elements. For plain spheres an element is a body; for bodies
+// made of contact spheres (shape templates) each sphere is an element, pairs within one body are
+// never listed, and keys are element keys (body order * stride + sphere index).
+struct ContactElements {
+  std::size_t size = 0, owned = 0;  // elements of owned bodies first
+  const double* x = nullptr;        // 3 per element
+  const double* radius = nullptr;
+  const std::int64_t* key = nullptr;   // canonical, unique
+  const std::int32_t* body = nullptr;  // local body per element; nullptr: element i is body i
+  const double* body_mass = nullptr;
+};
+
 class NeighborList {
  public:
+  void build(const ContactElements& e, double skin, const HistoryMap& extra);
   // Lists pairs with at least one owned body. A pair's history comes from the previous list (a
   // merge of the two sorted key lists), else from `extra` (bodies that migrated in, a restart),
   // else starts at zero.
@@ -31,7 +44,7 @@ class NeighborList {
   void collect(HistoryMap& out) const;
 
   std::size_t size() const { return first.size(); }
-  std::vector<std::int32_t> first, second;  // local indices; order[first] < order[second]
+  std::vector<std::int32_t> first, second;  // local element indices; key[first] < key[second]
   std::vector<PairKey> keys;
   std::vector<double> history;  // 3 per pair (xi of eq. 5)
   std::vector<double> meff;     // m_a m_b / (m_a + m_b), constant while listed

@@ -128,11 +128,13 @@ void ParticleStore::pack_ghost(std::size_t i, std::vector<double>& buf) const {
   buf.push_back(static_cast<double>(id[i]));
   buf.push_back(static_cast<double>(order[i]));
   buf.push_back(material[i]);
+  buf.push_back(shape[i]);
   buf.push_back(radius[i]);
   buf.push_back(mass[i]);
   for (int k = 0; k < 3; ++k) buf.push_back(x[3 * i + k]);
   for (int k = 0; k < 3; ++k) buf.push_back(v[3 * i + k]);
   for (int k = 0; k < 3; ++k) buf.push_back(omega[3 * i + k]);
+  for (int k = 0; k < 4; ++k) buf.push_back(q[4 * i + k]);
 }
 
 void ParticleStore::unpack_ghost_append(const double* b) {
@@ -141,13 +143,14 @@ void ParticleStore::unpack_ghost_append(const double* b) {
   id[i] = static_cast<std::int64_t>(b[0]);
   order[i] = static_cast<std::int64_t>(b[1]);
   material[i] = static_cast<std::int32_t>(b[2]);
-  shape[i] = 0;
-  radius[i] = b[3];
-  mass[i] = b[4];
-  inertia[i] = 0.4 * b[4] * b[3] * b[3];
-  for (int k = 0; k < 3; ++k) x[3 * i + k] = b[5 + k];
-  for (int k = 0; k < 3; ++k) v[3 * i + k] = b[8 + k];
-  for (int k = 0; k < 3; ++k) omega[3 * i + k] = b[11 + k];
+  shape[i] = static_cast<std::int32_t>(b[3]);
+  radius[i] = b[4];
+  mass[i] = b[5];
+  inertia[i] = 0.4 * b[5] * b[4] * b[4];  // spheres; shaped bodies take theirs from the template
+  for (int k = 0; k < 3; ++k) x[3 * i + k] = b[6 + k];
+  for (int k = 0; k < 3; ++k) v[3 * i + k] = b[9 + k];
+  for (int k = 0; k < 3; ++k) omega[3 * i + k] = b[12 + k];
+  for (int k = 0; k < 4; ++k) q[4 * i + k] = b[15 + k];
 }
 
 }  // namespace tessera

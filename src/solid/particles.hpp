@@ -54,11 +54,11 @@ struct ParticleStore {
   // Appends a body unpacked from buf at offset; returns the new offset.
   std::size_t unpack_append(const double* buf);
 
-  // What a ghost needs for contact forces: id, order, material, radius, mass, x, v, omega.
-  static constexpr int ghost_size = 14;
+  // What a ghost needs for contact forces: id, order, material, shape, radius, mass, x, v, omega, q.
+  static constexpr int ghost_size = 19;
   void pack_ghost(std::size_t i, std::vector<double>& buf) const;
   void unpack_ghost_append(const double* buf);
-  static constexpr int forward_size = 9;  // x, v, omega, sent every step
+  static constexpr int forward_size = 9;  // x, v, omega, sent every step (+ q for shaped bodies)
 };
 
 }  // namespace tessera
