@@ -31,6 +31,7 @@ DemScene::DemScene(const ConfigNode& root, MPI_Comm comm, const std::string& cas
   ContactModel model(solid);
   Walls walls(solid, model);
   dem_ = std::make_unique<DemSolver>(*decomp_, std::move(model), std::move(walls), DemSettings::from_config(solid));
+  dem_->set_shapes(read_shapes(solid, case_dir));
 
   const ConfigNode run = root.section("run");
   if (run.has("end_time")) end_time_ = run.real("end_time", Dim::time, Range::positive());
@@ -181,7 +182,8 @@ nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolv
   nlohmann::json q;
   q["bodies"] = stats.bodies;
   q["kinetic_energy"] = stats.kinetic_translational + stats.kinetic_rotational;
-  q["coordination_number"] = stats.bodies ? 2.0 * stats.contacts / stats.bodies : 0.0;
+  q["coordination_number"] = stats.bodies ? 2.0 * stats.body_contacts / stats.bodies : 0.0;
+  if (dem_->shaped()) q["touching_contact_sphere_pairs"] = stats.contacts;
   quantities(q);
 
   nlohmann::json s;

@@ -3,6 +3,8 @@
 // gravity until the total kinetic energy falls below `deposition.settled_kinetic_energy`. The
 // settled bed is the run's checkpoint (DIR/checkpoint.h5, a start for later scenes) and a LAMMPS
 // data file (DIR/bed.data) for peers. Reports packing fraction and coordination number.
+// Grains are spheres of `diameter`, or bodies of the shape template `shape` (solid.shapes), each
+// turned to a random orientation (uniform over rotations, from the seed and the grain id).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -31,7 +33,16 @@ class DepositionScene final : public DemScene {
   DepositionScene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir) : DemScene(root, comm, case_dir) {
     const ConfigNode d = root.section("deposition");
     material_ = dem_->model().material_index(d.text("material"), d.key_path("material"));
-    diameter_ = d.real("diameter", Dim::length, Range::positive());
+    const std::string shape = d.text("shape", "sphere");
+    if (shape != "sphere") {
+      const auto& shapes = dem_->shapes();
+      for (std::size_t k = 0; k < shapes.size(); ++k)
+        if (shapes[k].name == shape) shape_ = static_cast<int>(k) + 1;
+      if (shape_ == 0) d.fail("shape", "'sphere' or the name of a shape in solid.shapes");
+      diameter_ = 2 * shapes[shape_ - 1].bounding_radius;  // the lattice must clear any orientation
+    } else {
+      diameter_ = d.real("diameter", Dim::length, Range::positive());
+    }
     spacing_ = d.real("lattice_spacing", Dim::length, Range::positive(), 1.1 * diameter_);
     if (spacing_ < diameter_) d.fail("lattice_spacing", "at least the grain diameter (grains must not overlap)");
     jitter_ = d.real("jitter", Dim::length, Range::non_negative(), 0.03 * diameter_);
@@ -67,7 +78,16 @@ class DepositionScene final : public DemScene {
           Vec3 x{region_lo_.x + (i + 0.5) * spacing_, region_lo_.y + (j + 0.5) * spacing_,
                  region_lo_.z + (k + 0.5) * spacing_};
           for (int c = 0; c < 3; ++c) x[c] += jitter_ * (2 * unit_random(seed_, id, c) - 1);
-          dem_->add_sphere(id, material_, r, x, {});
+          if (shape_ == 0) {
+            dem_->add_sphere(id, material_, r, x, {});
+            continue;
+          }
+          // Uniform random rotation (Shoemake 1992).
+          const double u1 = unit_random(seed_, id, 3), u2 = unit_random(seed_, id, 4), u3 = unit_random(seed_, id, 5);
+          const double a = std::sqrt(1 - u1), b = std::sqrt(u1), pi2 = 2 * std::numbers::pi;
+          const Quaternion q{a * std::sin(pi2 * u2), a * std::cos(pi2 * u2), b * std::sin(pi2 * u3),
+                             b * std::cos(pi2 * u3)};
+          dem_->add_body(id, material_, shape_, x, q, {});
         }
   }
 
@@ -106,7 +126,8 @@ class DepositionScene final : public DemScene {
       weight += p.mass[i];
       if (x.x < lo.x + 2 * d || x.x > hi.x - 2 * d || x.y < lo.y + 2 * d || x.y > hi.y - 2 * d) continue;
       if (x.z < z0 || x.z >= z1) continue;
-      solid += 4.0 / 3.0 * std::numbers::pi * std::pow(p.radius[i], 3);
+      solid += p.shape[i] > 0 ? p.mass[i] / dem_->model().materials()[p.material[i]].density
+                              : 4.0 / 3.0 * std::numbers::pi * std::pow(p.radius[i], 3);
     }
     double sums[2] = {solid, weight};
     MPI_Allreduce(MPI_IN_PLACE, sums, 2, MPI_DOUBLE, MPI_SUM, comm);
@@ -125,7 +146,7 @@ class DepositionScene final : public DemScene {
   }
 
  private:
-  int material_ = 0;
+  int material_ = 0, shape_ = 0;
   double diameter_ = 0, spacing_ = 0, jitter_ = 0, settled_energy_ = 0, min_time_ = 0, settle_time_ = 0;
   std::uint64_t seed_ = 0;
   Vec3 region_lo_, region_hi_;

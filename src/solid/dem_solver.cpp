@@ -8,6 +8,7 @@
 #include <numeric>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "core/errors.hpp"
 #include "solid/contact_kernel.hpp"
@@ -51,6 +52,15 @@ void DemSolver::set_shapes(std::vector<ShapeTemplate> templates) {
   shapes_ = std::move(templates);
   key_stride_ = 1;
   for (const auto& t : shapes_) key_stride_ = std::max<std::int64_t>(key_stride_, std::ssize(t.spheres));
+  // Templates with equal principal moments rotate like spheres (w += dt/2 T / I, q as for spheres):
+  // free rotation of a spherical top is uniform, and a one-sphere template then moves bitwise as
+  // the plain sphere.
+  anisotropic_.assign(shapes_.size() + 1, 0);
+  for (std::size_t k = 0; k < shapes_.size(); ++k) {
+    const Vec3 I = shapes_[k].inertia_per_density;
+    const double lo = std::min({I.x, I.y, I.z}), hi = std::max({I.x, I.y, I.z});
+    anisotropic_[k + 1] = hi - lo > 1e-12 * hi;
+  }
   if (shaped()) {
     halo_.forward_orientation = true;
     halo_.key_stride = key_stride_;
@@ -299,7 +309,7 @@ void DemSolver::rebuild() {
     for (std::size_t i = 0; i < p_.owned; ++i) {
       inv_mass_[i] = 1.0 / p_.mass[i];
       // Shaped bodies: 0 here, so that the sphere update leaves their w alone (see rotate_shaped).
-      inv_inertia_[i] = p_.shape[i] > 0 ? 0.0 : 1.0 / p_.inertia[i];
+      inv_inertia_[i] = anisotropic(p_.shape[i]) ? 0.0 : 1.0 / p_.inertia[i];
       const int sh = p_.shape[i];
       for (int k = 0; k < 3; ++k)
         inertia3_[3 * i + k] =
@@ -457,7 +467,7 @@ void DemSolver::integrate_first() {
   // Orientation: q <- normalize(q + dt/2 (0, w) q). The update changes |q|^2 by O((w dt)^2), so one
   // Newton step of 1/sqrt about 1 normalises to round-off without a square root.
   for (std::size_t i = 0; i < n; ++i) {
-    if (shaped() && p_.shape[i] > 0) {
+    if (anisotropic(p_.shape[i])) {
       rotate_shaped(i, t + 3 * i, h, dt);
       continue;
     }
@@ -496,7 +506,7 @@ void DemSolver::integrate_second() {
   }
   if (shaped())
     for (std::size_t i = 0; i < n; ++i)
-      if (p_.shape[i] > 0) rotate_shaped(i, t + 3 * i, h, 0.0);
+      if (anisotropic(p_.shape[i])) rotate_shaped(i, t + 3 * i, h, 0.0);
 }
 
 void DemSolver::rotate_shaped(std::size_t i, const double* torque, double h, double dt) {
@@ -746,7 +756,7 @@ void DemSolver::step() {
 
 DemStats DemSolver::stats() const {
   double e[3] = {0, 0, 0};
-  long c[4] = {static_cast<long>(p_.owned), 0, 0, 0};  // bodies, contacts, wall contacts, non-finite
+  long c[5] = {static_cast<long>(p_.owned), 0, 0, 0, 0};  // bodies, contacts, wall contacts, non-finite, body pairs
   struct {
     double ratio;
     int body;
@@ -758,7 +768,7 @@ DemStats DemSolver::stats() const {
     const Vec3 x = p_.pos(i), v = p_.vel(i), w = p_.ang(i);
     if (!std::isfinite(norm2(x) + norm2(v) + norm2(w))) ++c[3];
     e[0] += 0.5 * p_.mass[i] * norm2(v);
-    if (p_.shape[i] > 0) {
+    if (anisotropic(p_.shape[i])) {
       const Quaternion q{p_.q[4 * i], p_.q[4 * i + 1], p_.q[4 * i + 2], p_.q[4 * i + 3]};
       const Vec3 wb = q.unrotate(w);
       for (int k = 0; k < 3; ++k) e[1] += 0.5 * inertia3_[3 * i + k] * wb[k] * wb[k];
@@ -773,6 +783,7 @@ DemStats DemSolver::stats() const {
   auto er = [&](std::size_t a) { return sh ? e_r_[a] : p_.radius[a]; };
   auto eid = [&](std::size_t a) { return p_.id[sh ? static_cast<std::size_t>(e_body_[a]) : a]; };
   const std::size_t owned_elements = sh ? e_owned_ : p_.owned;
+  std::unordered_set<PairKey> touching_bodies;
   for (std::size_t k = 0; k < list_.size(); ++k) {
     const auto a = static_cast<std::size_t>(list_.first[k]), b = static_cast<std::size_t>(list_.second[k]);
     if (a >= owned_elements) continue;  // counted by the owner of the lower-key element
@@ -780,8 +791,12 @@ DemStats DemSolver::stats() const {
     if (r < rs) {
       ++c[1];
       note_overlap(rs - r, std::min(er(a), er(b)), eid(a));
+      // Body pairs: a body's element keys all precede a higher-order body's, so the lower element's
+      // body is the pair's lower body and its owner counts the pair.
+      if (sh) touching_bodies.insert(pair_key(p_.order[e_body_[a]], p_.order[e_body_[b]]));
     }
   }
+  c[4] = sh ? static_cast<long>(touching_bodies.size()) : c[1];
   for (std::size_t i = 0; i < owned_elements; ++i)
     for (const auto& w : walls_.primitives()) {
       Vec3 n;
@@ -794,12 +809,13 @@ DemStats DemSolver::stats() const {
   MPI_Comm comm = decomp_.comm();
   MPI_Allreduce(MPI_IN_PLACE, e, 2, MPI_DOUBLE, MPI_SUM, comm);
   MPI_Allreduce(MPI_IN_PLACE, &e[2], 1, MPI_DOUBLE, MPI_MAX, comm);
-  MPI_Allreduce(MPI_IN_PLACE, c, 4, MPI_LONG, MPI_SUM, comm);
+  MPI_Allreduce(MPI_IN_PLACE, c, 5, MPI_LONG, MPI_SUM, comm);
   if (!std::isfinite(worst.ratio)) worst.ratio = 1e300;
   MPI_Allreduce(MPI_IN_PLACE, &worst, 1, MPI_DOUBLE_INT, MPI_MAXLOC, comm);
   DemStats s;
   s.bodies = c[0];
   s.contacts = c[1];
+  s.body_contacts = c[4];
   s.wall_contacts = c[2];
   s.finite = c[3] == 0;
   s.kinetic_translational = e[0];

@@ -54,6 +54,7 @@ struct DemStats {
   double kinetic_translational = 0, kinetic_rotational = 0;
   double max_speed = 0;
   long contacts = 0;             // touching element pairs (bodies; contact spheres of shaped bodies)
+  long body_contacts = 0;        // touching body pairs (one per pair however many spheres touch)
   long wall_contacts = 0;        // touching element-wall pairs
   double max_overlap_ratio = 0;  // largest overlap over the smaller radius (walls: the body's)
   std::int64_t max_overlap_body = -1;
@@ -132,6 +133,7 @@ class DemSolver {
   void build_wall_list_elements(const HistoryMap& extra);
   void reduce_element_forces();
   void rotate_shaped(std::size_t i, const double* torque, double h, double dt);
+  bool anisotropic(int shape) const { return shape > 0 && anisotropic_[shape]; }
 
   const Decomposition& decomp_;
   ContactModel model_;
@@ -172,6 +174,7 @@ class DemSolver {
   std::vector<Vec3> wall_force_;
   // Shaped mode.
   std::vector<ShapeTemplate> shapes_;
+  std::vector<char> anisotropic_;  // per shape id: principal moments differ (DLM rotation)
   std::int64_t key_stride_ = 1;
   std::vector<std::int32_t> e_body_;  // local body of each element
   std::vector<std::int64_t> e_key_;

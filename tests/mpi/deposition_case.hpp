@@ -30,4 +30,36 @@ deposition:
 run: {end_time: 1.0, check_interval: 1 ms}
 )";
 
+// The same with spheroidal grains of the seed's size (24 contact spheres each, to stay quick): 128
+// grains in random orientations, tumbling, so that contact-sphere pairs form and break between
+// bodies on different ranks and bodies migrate with their per-sphere histories.
+inline const char* kViolentShapedDeposition = R"(
+scene: deposition
+domain: {box_min: [0, 0, 0], box_max: [6 mm, 6 mm, 12 mm]}
+solid:
+  gravity: [0.5, -0.3, -981]
+  steps_per_contact: 20
+  neighbor_skin: 0.05 mm
+  materials: {sand: {density: 2650}, wall: {density: 2650}}
+  shapes:
+    - name: grain
+      spheroid: {semi_axes: [0.635 mm, 0.26 mm, 0.26 mm], rings: 5, segments: 9}
+      contact_spheres: {count: 24, radius: 0.1 mm}
+  contact:
+    law: hooke
+    pairs:
+      - {materials: [sand, sand], normal_stiffness: 1e4, tangential_stiffness: 1e4, restitution: 0.5, friction: 0.6}
+      - {materials: [sand, wall], normal_stiffness: 1e4, tangential_stiffness: 1e4, restitution: 0.5, friction: 0.6}
+  walls: [{type: box, min: [0, 0, 0], max: [6 mm, 6 mm, 12 mm], material: wall}]
+deposition:
+  shape: grain
+  material: sand
+  lattice_spacing: 1.45 mm
+  jitter: 0.05 mm
+  region_min: [0, 0, 0]
+  region_max: [6 mm, 6 mm, 12 mm]
+  settled_kinetic_energy: 1e-30
+run: {end_time: 1.0, check_interval: 1 ms}
+)";
+
 }  // namespace tessera::test

@@ -25,5 +25,20 @@ TEST(Restart, ContinuesOnAnotherRankCount) {
   }
 }
 
+// The same for shaped grains: per-sphere pair and wall histories are in the checkpoint by key.
+TEST(Restart, ShapedGrainsContinueOnAnotherRankCount) {
+  const int size = world_size(), rank = world_rank();
+  ASSERT_GT(size, 1) << "run under mpirun -n 2 or more";
+  const std::string dir = (std::filesystem::temp_directory_path() / "tessera_restart_across_shaped").string();
+  const BodyStates straight = run_scene_on(1, kViolentShapedDeposition, {"run.max_steps=2400"}, dir + "/straight");
+  run_scene_on(size, kViolentShapedDeposition, {"run.max_steps=1500"}, dir + "/first");
+  const BodyStates resumed =
+      run_scene_on(1, kViolentShapedDeposition, {"run.max_steps=2400"}, dir + "/second", dir + "/first/checkpoint.h5");
+  if (rank == 0) {
+    EXPECT_GT(straight.size(), 0u);
+    EXPECT_EQ(count_differences(straight, resumed, "shaped restart on 1 rank"), 0);
+  }
+}
+
 }  // namespace
 }  // namespace tessera::test
