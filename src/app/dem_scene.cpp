@@ -90,7 +90,7 @@ nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolv
     dem_->setup(false);
   } else {
     create_bodies();
-    dem_->setup(true);
+    dem_->setup(!continues_state());
   }
   // Set-up succeeded: only now does the run leave anything on disk.
   if (root) {

@@ -21,7 +21,7 @@
 namespace tessera {
 
 struct RunOptions {
-  std::string output_dir;         // created once set-up has succeeded
+  std::string output_dir;          // created once set-up has succeeded
   std::string resolved_case_yaml;  // written there as case.resolved.yaml
   std::optional<std::string> restart;
   bool quiet = false;
@@ -41,6 +41,8 @@ class DemScene {
 
  protected:
   virtual void create_bodies() = 0;
+  // True when create_bodies loaded a saved state (forces, histories, order keys): set-up keeps it.
+  virtual bool continues_state() const { return false; }
   // Called every run.check_interval of simulated time (collective): true ends the run.
   virtual bool finished(const DemStats& stats) {
     (void)stats;

@@ -43,11 +43,32 @@ class DepositionScene final : public DemScene {
     } else {
       diameter_ = d.real("diameter", Dim::length, Range::positive());
     }
-    spacing_ = d.real("lattice_spacing", Dim::length, Range::positive(), 1.1 * diameter_);
-    if (spacing_ < diameter_) d.fail("lattice_spacing", "at least the grain diameter (grains must not overlap)");
+    // Extent of a grain along each axis: any orientation needs the bounding diameter; aligned
+    // shaped grains (body frame = world frame) need their contact spheres' extent.
+    Vec3 extent{diameter_, diameter_, diameter_};
+    if (shape_ > 0) {
+      aligned_ = d.choice("orientation", {"random", "aligned"}, "random") == "aligned";
+      if (aligned_) {
+        const ShapeTemplate& t = dem_->shapes()[shape_ - 1];
+        extent = {};
+        for (const auto& c : t.spheres)
+          for (int k = 0; k < 3; ++k) extent[k] = std::max(extent[k], 2 * (std::fabs(c[k]) + t.sphere_radius));
+      }
+    }
+    if (d.is_list("lattice_spacing")) {
+      spacing_ = d.vec3("lattice_spacing", Dim::length);
+    } else {
+      const double s = d.real("lattice_spacing", Dim::length, Range::positive(), 1.1 * diameter_);
+      spacing_ = {s, s, s};
+    }
     jitter_ = d.real("jitter", Dim::length, Range::non_negative(), 0.03 * diameter_);
-    if (spacing_ - diameter_ < 2 * jitter_ && jitter_ > 0)
-      d.fail("jitter", "at most (lattice_spacing - diameter) / 2, so that grains start apart");
+    for (int k = 0; k < 3; ++k) {
+      if (spacing_[k] < extent[k])
+        d.fail("lattice_spacing", "at least the grain's extent along each axis (" + std::to_string(extent[k]) +
+                                      " m along axis " + std::to_string(k) + "), so that grains do not overlap");
+      if (spacing_[k] - extent[k] < 2 * jitter_ && jitter_ > 0)
+        d.fail("jitter", "at most (lattice_spacing - grain extent) / 2, so that grains start apart");
+    }
     seed_ = static_cast<std::uint64_t>(d.integer("seed", 0, 1L << 40, 4711));
     region_lo_ = d.vec3("region_min", Dim::length);
     region_hi_ = d.vec3("region_max", Dim::length);
@@ -56,11 +77,13 @@ class DepositionScene final : public DemScene {
       if (!(region_hi_[k] > region_lo_[k])) d.fail("region_max", "larger than region_min in every direction");
       if (region_lo_[k] < lo[k] || region_hi_[k] > hi[k])
         d.fail("region_max", "a region inside domain.box_min .. domain.box_max (grains must start in the box)");
-      counts_[k] = static_cast<long>(std::floor((region_hi_[k] - region_lo_[k]) / spacing_));
+      counts_[k] = static_cast<long>(std::floor((region_hi_[k] - region_lo_[k]) / spacing_[k]));
       if (counts_[k] < 1) d.fail("region_max", "a region at least one lattice spacing wide");
     }
     if (counts_[0] * counts_[1] * counts_[2] > kMaxBodyId)
       d.fail("region_max", "a region holding fewer than 2^32 grains");
+    // The first max_grains lattice sites (x fastest, then y, then z), if set.
+    max_grains_ = d.integer("max_grains", 1, kMaxBodyId, kMaxBodyId);
     settled_energy_ = d.real("settled_kinetic_energy", Dim::energy, Range::positive());
     min_time_ = d.real("min_time", Dim::time, Range::non_negative(), 0.0);
     if (!end_time_) root.section("run").fail("end_time", "is required: the longest the deposition may take");
@@ -74,9 +97,9 @@ class DepositionScene final : public DemScene {
     const double r = 0.5 * diameter_;
     for (long k = 0; k < counts_[2]; ++k)
       for (long j = 0; j < counts_[1]; ++j)
-        for (long i = 0; i < counts_[0]; ++i, ++id) {
-          Vec3 x{region_lo_.x + (i + 0.5) * spacing_, region_lo_.y + (j + 0.5) * spacing_,
-                 region_lo_.z + (k + 0.5) * spacing_};
+        for (long i = 0; i < counts_[0] && id <= max_grains_; ++i, ++id) {
+          Vec3 x{region_lo_.x + (i + 0.5) * spacing_.x, region_lo_.y + (j + 0.5) * spacing_.y,
+                 region_lo_.z + (k + 0.5) * spacing_.z};
           for (int c = 0; c < 3; ++c) x[c] += jitter_ * (2 * unit_random(seed_, id, c) - 1);
           if (shape_ == 0) {
             dem_->add_sphere(id, material_, r, x, {});
@@ -85,8 +108,9 @@ class DepositionScene final : public DemScene {
           // Uniform random rotation (Shoemake 1992).
           const double u1 = unit_random(seed_, id, 3), u2 = unit_random(seed_, id, 4), u3 = unit_random(seed_, id, 5);
           const double a = std::sqrt(1 - u1), b = std::sqrt(u1), pi2 = 2 * std::numbers::pi;
-          const Quaternion q{a * std::sin(pi2 * u2), a * std::cos(pi2 * u2), b * std::sin(pi2 * u3),
-                             b * std::cos(pi2 * u3)};
+          const Quaternion q = aligned_ ? Quaternion{}
+                                        : Quaternion{a * std::sin(pi2 * u2), a * std::cos(pi2 * u2),
+                                                     b * std::sin(pi2 * u3), b * std::cos(pi2 * u3)};
           dem_->add_body(id, material_, shape_, x, q, {});
         }
   }
@@ -134,6 +158,14 @@ class DepositionScene final : public DemScene {
     const double sample = ax * ay * (z1 - z0);
     q["packing_fraction"] = (ax > 0 && ay > 0 && z1 > z0) ? sums[0] / sample : 0.0;
     q["bed_height"] = z_top + 0.5 * d - z_floor;
+    if (shape_ > 0) {
+      const ShapeTemplate& t = dem_->shapes()[shape_ - 1];
+      q["grain_volume"] = t.volume;
+      q["grain_mass"] = t.volume * dem_->model().materials()[material_].density;
+      q["grain_contact_spheres"] = t.spheres.size();
+      q["grain_envelope_gap"] = t.envelope.gap;
+      q["grain_envelope_overshoot"] = t.envelope.overshoot;
+    }
     q["settled"] = settled_;
     q["settle_time"] = settled_ ? settle_time_ : dem_->time();
     // Floor reaction over the bed's weight: 1 for a hydrostatic bed, below 1 with wall friction (Janssen).
@@ -147,7 +179,10 @@ class DepositionScene final : public DemScene {
 
  private:
   int material_ = 0, shape_ = 0;
-  double diameter_ = 0, spacing_ = 0, jitter_ = 0, settled_energy_ = 0, min_time_ = 0, settle_time_ = 0;
+  Vec3 spacing_;
+  bool aligned_ = false;
+  long max_grains_ = 0;
+  double diameter_ = 0, jitter_ = 0, settled_energy_ = 0, min_time_ = 0, settle_time_ = 0;
   std::uint64_t seed_ = 0;
   Vec3 region_lo_, region_hi_;
   long counts_[3] = {0, 0, 0};

@@ -44,6 +44,7 @@ class ConfigNode {
   const std::string& path() const { return path_; }
   std::string key_path(const std::string& key) const;
   bool has(const std::string& key) const;
+  bool is_list(const std::string& key) const;  // present and a sequence
 
   double real(const std::string& key, Dim dim, Range range) const;
   double real(const std::string& key, Dim dim, Range range, double fallback) const;

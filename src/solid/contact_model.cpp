@@ -105,9 +105,9 @@ PairParams ContactModel::read_pair(const ConfigNode& node, int a, int b) const {
   } else if (node.has("tangential_damping_rate")) {
     p.dt_rate = node.real("tangential_damping_rate", Dim::rate, Range::non_negative());
   } else {
-    // The seed takes D_t = D_n; with a restitution, the same damping ratio on k_t.
+    // The seed takes D_t = D_n; with a restitution, the same damping ratio on k_t. (Nothing goes to
+    // the resolved case: re-running it must apply this same rule.)
     p.dt_abs = p.dn_abs, p.dt_rate = p.dn_rate, p.dt_zeta = p.dn_zeta;
-    node.real("tangential_damping", Dim::damping, Range::non_negative(), p.dn_abs);
   }
   return p;
 }

@@ -175,24 +175,51 @@ CheckpointExtras read_checkpoint(const std::string& path, DemSolver& dem) {
 void write_lammps_data(const std::string& path, const DemSolver& dem) {
   MPI_Comm comm = dem.decomposition().comm();
   const ParticleStore& p = dem.particles();
-  constexpr int cols = 12;  // id type diameter density x y z vx vy vz (wx wy wz below)
+  constexpr int cols = 12;  // id type diameter density x y z vx vy vz molecule 0 (wx wy wz below)
   std::vector<double> rows;
   for (std::size_t i = 0; i < p.owned; ++i) {
-    const double vol = 4.0 / 3.0 * std::numbers::pi * std::pow(p.radius[i], 3);
-    const double r[cols] = {static_cast<double>(p.id[i]),
-                            static_cast<double>(p.material[i] + 1),
-                            2 * p.radius[i],
-                            p.mass[i] / vol,
-                            p.x[3 * i],
-                            p.x[3 * i + 1],
-                            p.x[3 * i + 2],
-                            p.v[3 * i],
-                            p.v[3 * i + 1],
-                            p.v[3 * i + 2],
-                            0,
-                            0};
-    rows.insert(rows.end(), r, r + cols);
-    rows.insert(rows.end(), &p.omega[3 * i], &p.omega[3 * i] + 3);
+    const int sh = p.shape[i];
+    if (sh == 0) {
+      const double vol = 4.0 / 3.0 * std::numbers::pi * std::pow(p.radius[i], 3);
+      const double r[cols] = {static_cast<double>(p.id[i]),
+                              static_cast<double>(p.material[i] + 1),
+                              2 * p.radius[i],
+                              p.mass[i] / vol,
+                              p.x[3 * i],
+                              p.x[3 * i + 1],
+                              p.x[3 * i + 2],
+                              p.v[3 * i],
+                              p.v[3 * i + 1],
+                              p.v[3 * i + 2],
+                              static_cast<double>(p.id[i]),
+                              0};
+      rows.insert(rows.end(), r, r + cols);
+      rows.insert(rows.end(), &p.omega[3 * i], &p.omega[3 * i] + 3);
+      continue;
+    }
+    // A shaped body: its contact spheres, molecule id = body id, the body's mass split evenly.
+    const ShapeTemplate& t = dem.shapes()[sh - 1];
+    const Quaternion q{p.q[4 * i], p.q[4 * i + 1], p.q[4 * i + 2], p.q[4 * i + 3]};
+    const double count = static_cast<double>(t.spheres.size());
+    const double rho = p.mass[i] / count / (4.0 / 3.0 * std::numbers::pi * std::pow(t.sphere_radius, 3));
+    const Vec3 w = p.ang(i);
+    for (std::size_t k = 0; k < t.spheres.size(); ++k) {
+      const Vec3 arm = q.rotate(t.spheres[k]), x = p.pos(i) + arm, v = p.vel(i) + cross(w, arm);
+      const double r[cols] = {static_cast<double>((p.id[i] - 1) * dem.key_stride() + static_cast<long>(k) + 1),
+                              static_cast<double>(p.material[i] + 1),
+                              2 * t.sphere_radius,
+                              rho,
+                              x.x,
+                              x.y,
+                              x.z,
+                              v.x,
+                              v.y,
+                              v.z,
+                              static_cast<double>(p.id[i]),
+                              0};
+      rows.insert(rows.end(), r, r + cols);
+      rows.insert(rows.end(), &p.omega[3 * i], &p.omega[3 * i] + 3);
+    }
   }
   constexpr int stride = cols + 3;
   int size = 1, mine = static_cast<int>(rows.size());
@@ -230,6 +257,14 @@ void write_lammps_data(const std::string& path, const DemSolver& dem) {
     const double* r = &all[k * stride];
     o << static_cast<long>(r[0]) << " " << r[7] << " " << r[8] << " " << r[9] << " " << r[12] << " " << r[13] << " "
       << r[14] << "\n";
+  }
+  if (dem.shaped()) {
+    // For `fix property/atom mol` (read_data ... fix ID NULL Molecules): LAMMPS fix rigid/small.
+    o << "\nMolecules\n\n";
+    for (const auto k : order) {
+      const double* r = &all[k * stride];
+      o << static_cast<long>(r[0]) << " " << static_cast<long>(r[10]) << "\n";
+    }
   }
   write_file_atomically(path, o.str());
 }

@@ -39,6 +39,8 @@ void write_checkpoint(const std::string& path, const DemSolver& dem, const Check
 CheckpointExtras read_checkpoint(const std::string& path, DemSolver& dem);
 
 // Collective: gathers on rank 0, writes bodies sorted by id. Types are material index + 1.
+// Shaped bodies are written as their contact spheres (molecule id = body id, mass split evenly) with
+// a Molecules section, for LAMMPS fix property/atom mol + fix rigid/small.
 void write_lammps_data(const std::string& path, const DemSolver& dem);
 // Collective: every rank reads the file and keeps its own bodies. type_materials[t - 1] is the
 // material of LAMMPS type t; the mass comes from the file's per-atom density, as in LAMMPS.

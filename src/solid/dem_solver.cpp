@@ -282,6 +282,9 @@ void DemSolver::rebuild() {
     auto t = timers_.scope("neighbor");
     if (shaped()) {
       build_elements();
+      e_x_.resize(3 * e_body_.size());
+      for (std::size_t k = 0; k < e_body_.size(); ++k)
+        e_x_[3 * k] = k_geometry_[k].x, e_x_[3 * k + 1] = k_geometry_[k].y, e_x_[3 * k + 2] = k_geometry_[k].z;
       ContactElements e;
       e.size = e_body_.size();
       e.owned = e_owned_;
@@ -349,26 +352,40 @@ void DemSolver::build_elements() {
   }
   e_first_[n] = e_body_.size();
   if (n == p_.owned) e_owned_ = e_body_.size();
-  e_x_.resize(3 * e_body_.size());
-  e_arm_.resize(3 * e_body_.size());
   k_geometry_.resize(e_body_.size());
   k_motion_.resize(e_body_.size());
   update_elements(0, n);
 }
 
 void DemSolver::update_elements(std::size_t first_body, std::size_t end_body) {
-  // Element e of body i: arm = R(q) c_e, x_e = x + arm, v_e = v + w x arm; the kernel mirrors too.
+  // Element e of body i: arm = R(q) c_e, x_e = x + arm, v_e = v + w x arm, written to the kernel
+  // mirrors (the elements' only per-step storage).
+  KernelGeometry* __restrict g = k_geometry_.data();
+  KernelMotion* __restrict m = k_motion_.data();
   for (std::size_t i = first_body; i < end_body; ++i) {
     const int sh = p_.shape[i];
-    const Vec3 x = p_.pos(i), v = p_.vel(i), w = p_.ang(i);
-    const Quaternion q{p_.q[4 * i], p_.q[4 * i + 1], p_.q[4 * i + 2], p_.q[4 * i + 3]};
-    const Vec3* centres = sh > 0 ? shapes_[sh - 1].spheres.data() : nullptr;
-    for (std::size_t e = e_first_[i], k = 0; e < e_first_[i + 1]; ++e, ++k) {
-      const Vec3 arm = centres ? q.rotate(centres[k]) : Vec3{};
-      const Vec3 xe = x + arm, ve = v + cross(w, arm);
-      for (int d = 0; d < 3; ++d) e_x_[3 * e + d] = xe[d], e_arm_[3 * e + d] = arm[d];
-      k_geometry_[e] = {xe.x, xe.y, xe.z, e_r_[e]};
-      k_motion_[e] = {ve.x, ve.y, ve.z, w.x, w.y, w.z};
+    const double x = p_.x[3 * i], y = p_.x[3 * i + 1], z = p_.x[3 * i + 2];
+    const double vx = p_.v[3 * i], vy = p_.v[3 * i + 1], vz = p_.v[3 * i + 2];
+    const double wx = p_.omega[3 * i], wy = p_.omega[3 * i + 1], wz = p_.omega[3 * i + 2];
+    const std::size_t e0 = e_first_[i], e1 = e_first_[i + 1];
+    if (sh == 0) {
+      g[e0] = {x, y, z, e_r_[e0]};
+      m[e0] = {vx, vy, vz, wx, wy, wz};
+      continue;
+    }
+    const double qw = p_.q[4 * i], qx = p_.q[4 * i + 1], qy = p_.q[4 * i + 2], qz = p_.q[4 * i + 3];
+    // R(q) for a unit quaternion.
+    const double r00 = 1 - 2 * (qy * qy + qz * qz), r01 = 2 * (qx * qy - qw * qz), r02 = 2 * (qx * qz + qw * qy);
+    const double r10 = 2 * (qx * qy + qw * qz), r11 = 1 - 2 * (qx * qx + qz * qz), r12 = 2 * (qy * qz - qw * qx);
+    const double r20 = 2 * (qx * qz - qw * qy), r21 = 2 * (qy * qz + qw * qx), r22 = 1 - 2 * (qx * qx + qy * qy);
+    const Vec3* c = shapes_[sh - 1].spheres.data();
+    const double r = shapes_[sh - 1].sphere_radius;
+    for (std::size_t e = e0; e < e1; ++e, ++c) {
+      const double ax = r00 * c->x + r01 * c->y + r02 * c->z;
+      const double ay = r10 * c->x + r11 * c->y + r12 * c->z;
+      const double az = r20 * c->x + r21 * c->y + r22 * c->z;
+      g[e] = {x + ax, y + ay, z + az, r};
+      m[e] = {vx + (wy * az - wz * ay), vy + (wz * ax - wx * az), vz + (wx * ay - wy * ax), wx, wy, wz};
     }
   }
 }
@@ -384,7 +401,7 @@ void DemSolver::build_wall_list_elements(const HistoryMap& extra) {
   const auto& prims = walls_.primitives();
   std::size_t old = 0;
   for (std::size_t e = 0; e < e_owned_; ++e) {
-    const Vec3 xe = Vec3::load(&e_x_[3 * e]);
+    const Vec3 xe{k_geometry_[e].x, k_geometry_[e].y, k_geometry_[e].z};
     for (std::size_t s = 0; s < prims.size(); ++s) {
       Vec3 n;
       if (prims[s].overlap(xe, e_r_[e] + skin_, n) <= 0.0) continue;
@@ -407,11 +424,14 @@ void DemSolver::build_wall_list_elements(const HistoryMap& extra) {
 void DemSolver::reduce_element_forces() {
   // F = sum F_e, T = sum (T_e + arm_e x F_e), element by element (key order: deterministic).
   b_force_.assign(p_.owned, KernelForce{0, 0, 0, 0, 0, 0});
+  // The arm is the element's position relative to the centre, as the contact saw it.
   for (std::size_t i = 0; i < p_.owned; ++i) {
     KernelForce& b = b_force_[i];
+    const Vec3 xi = p_.pos(i);
     for (std::size_t e = e_first_[i]; e < e_first_[i + 1]; ++e) {
       const KernelForce& f = k_force_[e];
-      const Vec3 t = cross(Vec3::load(&e_arm_[3 * e]), Vec3{f.fx, f.fy, f.fz});
+      const Vec3 arm = Vec3{k_geometry_[e].x, k_geometry_[e].y, k_geometry_[e].z} - xi;
+      const Vec3 t = cross(arm, Vec3{f.fx, f.fy, f.fz});
       b.fx += f.fx, b.fy += f.fy, b.fz += f.fz;
       b.tx += f.tx + t.x, b.ty += f.ty + t.y, b.tz += f.tz + t.z;
     }
@@ -420,10 +440,18 @@ void DemSolver::reduce_element_forces() {
 
 bool DemSolver::needs_rebuild() {
   double max2 = 0;
-  // Shaped bodies: their contact spheres' displacement (translation and rotation).
-  const double* x = shaped() ? e_x_.data() : p_.x.data();
-  const double* x0 = shaped() ? e_x_build_.data() : x_build_.data();
-  const std::size_t n = shaped() ? e_owned_ : p_.owned;
+  if (shaped()) {
+    // Contact spheres' displacement (translation and rotation).
+    const double* x0 = e_x_build_.data();
+    for (std::size_t e = 0; e < e_owned_; ++e) {
+      const KernelGeometry& g = k_geometry_[e];
+      const double dx = g.x - x0[3 * e], dy = g.y - x0[3 * e + 1], dz = g.z - x0[3 * e + 2];
+      max2 = std::max(max2, dx * dx + dy * dy + dz * dz);
+    }
+  }
+  const double* x = p_.x.data();
+  const double* x0 = x_build_.data();
+  const std::size_t n = shaped() ? 0 : p_.owned;
   for (std::size_t k = 0; k < 3 * n; k += 3) {
     const double dx = x[k] - x0[k], dy = x[k + 1] - x0[k + 1], dz = x[k + 2] - x0[k + 2];
     max2 = std::max(max2, dx * dx + dy * dy + dz * dz);
@@ -779,7 +807,7 @@ DemStats DemSolver::stats() const {
   }
   // Contacts between elements (bodies for spheres): positions and radii of elements.
   const bool sh = shaped();
-  auto ex = [&](std::size_t a) { return sh ? Vec3::load(&e_x_[3 * a]) : p_.pos(a); };
+  auto ex = [&](std::size_t a) { return sh ? Vec3{k_geometry_[a].x, k_geometry_[a].y, k_geometry_[a].z} : p_.pos(a); };
   auto er = [&](std::size_t a) { return sh ? e_r_[a] : p_.radius[a]; };
   auto eid = [&](std::size_t a) { return p_.id[sh ? static_cast<std::size_t>(e_body_[a]) : a]; };
   const std::size_t owned_elements = sh ? e_owned_ : p_.owned;

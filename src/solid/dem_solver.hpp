@@ -178,8 +178,8 @@ class DemSolver {
   std::int64_t key_stride_ = 1;
   std::vector<std::int32_t> e_body_;  // local body of each element
   std::vector<std::int64_t> e_key_;
-  std::vector<double> e_x_, e_r_, e_arm_;  // position, radius, R(q) c (3, 1, 3 per element)
-  std::vector<std::size_t> e_first_;       // per local body: its first element (size bodies + 1)
+  std::vector<double> e_x_, e_r_;     // position at the last build (3 per element), radius
+  std::vector<std::size_t> e_first_;  // per local body: its first element (size bodies + 1)
   std::size_t e_owned_ = 0;
   std::vector<double> e_x_build_;
   std::vector<double> inertia3_;    // owned bodies: principal moments (3 each)
