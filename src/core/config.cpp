@@ -73,7 +73,7 @@ bool ConfigNode::has(const std::string& key) const {
   return n.IsDefined() && !n.IsNull();
 }
 
-bool ConfigNode::is_list(const std::string& key) const { return child(key).IsSequence(); }
+bool ConfigNode::is_list(const std::string& key) const { return has(key) && child(key).IsSequence(); }
 
 void ConfigNode::fail(const std::string& key, const std::string& allowed) const {
   throw InputError(key_path(key), show(child(key)), allowed);
