@@ -113,7 +113,7 @@ TEST(Config, InconsistentInputIsCaughtBeforeAnyWork) {
             std::string::npos);
   EXPECT_NE(scene_error({"solid.contact.pairs.0.normal_damping=1e-3"}).find("exactly one of"), std::string::npos);
   EXPECT_NE(scene_error({"scene=tunnel"}).find("one of deposition, bed"), std::string::npos);
-  EXPECT_NE(scene_error({"deposition.lattice_spacing=0.5 mm"}).find("at least the grain diameter"), std::string::npos);
+  EXPECT_NE(scene_error({"deposition.lattice_spacing=0.5 mm"}).find("at least the grain's extent"), std::string::npos);
   EXPECT_NE(scene_error({"solid.walls.0.material=steel"}).find("solid.walls.0.material"), std::string::npos);
   EXPECT_NE(scene_error({"solid.frobnicate=1"}).find("solid.frobnicate"), std::string::npos);
 }
