@@ -1,7 +1,9 @@
 """Renders the last step of a Tessera snapshot series with ParaView: each body a sphere glyph of
-its radius, coloured by speed, seen along +y (parallel projection).
+its radius (particles.xmf) or each grain's own surface (grains.xmf, shaped bodies), coloured by
+speed, seen along +y (parallel projection).
 
 usage: xvfb-run -a pvbatch tools/paraview_snapshot.py RUN_DIR/snapshots/particles.xmf OUT.png
+       xvfb-run -a pvbatch tools/paraview_snapshot.py RUN_DIR/snapshots/grains.xmf OUT.png
 (Debian packages paraview, python3-paraview and xvfb; not needed by the build or the tests.)
 """
 import sys
@@ -17,10 +19,13 @@ info = reader.GetDataInformation()
 print("points:", info.GetNumberOfPoints())
 pd = reader.PointData
 print("arrays:", [pd.GetArray(i).GetName() for i in range(pd.GetNumberOfArrays())])
-glyph = Glyph(Input=reader, GlyphType="Sphere")
-glyph.ScaleArray = ["POINTS", "radius"]
-glyph.ScaleFactor = 2.0
-glyph.GlyphMode = "All Points"
+if xmf.endswith("grains.xmf"):
+    glyph = reader  # surfaces as they are
+else:
+    glyph = Glyph(Input=reader, GlyphType="Sphere")
+    glyph.ScaleArray = ["POINTS", "radius"]
+    glyph.ScaleFactor = 2.0
+    glyph.GlyphMode = "All Points"
 view = GetActiveViewOrCreate("RenderView")
 view.ViewSize = [900, 700]
 d = Show(glyph, view)

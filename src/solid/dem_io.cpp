@@ -9,6 +9,7 @@
 #include <iomanip>
 #include <numbers>
 #include <sstream>
+#include <tuple>
 
 #include "core/errors.hpp"
 #include "core/h5_file.hpp"
@@ -71,6 +72,32 @@ void write_xdmf(const std::string& path, const std::vector<std::pair<double, std
   write_file_atomically(path, o.str());
 }
 
+// Grain surfaces: one unstructured triangle grid per snapshot.
+void write_surface_xdmf(const std::string& path, const std::vector<std::tuple<double, std::string, long, long>>& e) {
+  std::ostringstream o;
+  o << std::setprecision(17);
+  o << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
+    << "  <Grid Name=\"grains\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+  for (const auto& [time, file, nodes, tris] : e) {
+    o << "   <Grid Name=\"grains\" GridType=\"Uniform\">\n"
+      << "    <Time Value=\"" << time << "\"/>\n"
+      << "    <Topology TopologyType=\"Triangle\" NumberOfElements=\"" << tris << "\">"
+      << "<DataItem Format=\"HDF\" NumberType=\"Int\" Precision=\"8\" Dimensions=\"" << tris << " 3\">" << file
+      << ":/surface_triangles</DataItem></Topology>\n"
+      << "    <Geometry GeometryType=\"XYZ\"><DataItem Format=\"HDF\" NumberType=\"Float\" Precision=\"8\" "
+      << "Dimensions=\"" << nodes << " 3\">" << file << ":/surface_nodes</DataItem></Geometry>\n"
+      << "    <Attribute Name=\"velocity\" AttributeType=\"Vector\" Center=\"Node\"><DataItem Format=\"HDF\" "
+      << "NumberType=\"Float\" Precision=\"8\" Dimensions=\"" << nodes << " 3\">" << file
+      << ":/surface_velocity</DataItem></Attribute>\n"
+      << "    <Attribute Name=\"id\" AttributeType=\"Scalar\" Center=\"Cell\"><DataItem Format=\"HDF\" "
+      << "NumberType=\"Int\" Precision=\"8\" Dimensions=\"" << tris << "\">" << file
+      << ":/surface_id</DataItem></Attribute>\n"
+      << "   </Grid>\n";
+  }
+  o << "  </Grid>\n </Domain>\n</Xdmf>\n";
+  write_file_atomically(path, o.str());
+}
+
 }  // namespace
 
 void SnapshotSeries::write(const DemSolver& dem) {
@@ -80,7 +107,7 @@ void SnapshotSeries::write(const DemSolver& dem) {
   std::snprintf(name, sizeof name, "particles_%06zu.h5", entries_.size());
   if (comm_rank(comm) == 0) fs::create_directories(dir_);
   MPI_Barrier(comm);
-  long n = 0;
+  long n = 0, surface_nodes = 0, surface_triangles = 0;
   {
     H5File f = H5File::create(dir_ + "/" + name, comm);
     const std::size_t m = p.owned;
@@ -93,12 +120,46 @@ void SnapshotSeries::write(const DemSolver& dem) {
     std::vector<double> shape(p.shape.begin(), p.shape.begin() + static_cast<std::ptrdiff_t>(m));
     f.write_rows("shape", shape.data(), m, 1);
     f.set_attribute("time", dem.time());
+    if (dem.shaped()) {
+      // Template surface nodes at x + R(q) X (velocity v + w x R(q) X); triangles indexed globally:
+      // this rank's nodes start after those of the ranks before it.
+      std::vector<double> nodes, vel;
+      std::vector<std::int64_t> tris, ids;
+      for (std::size_t i = 0; i < m; ++i) {
+        if (p.shape[i] == 0) continue;
+        const ShapeTemplate& t = dem.shapes()[p.shape[i] - 1];
+        const Quaternion q{p.q[4 * i], p.q[4 * i + 1], p.q[4 * i + 2], p.q[4 * i + 3]};
+        const auto base = static_cast<std::int64_t>(nodes.size() / 3);
+        for (const auto& X : t.nodes) {
+          const Vec3 arm = q.rotate(X), x = p.pos(i) + arm, v = p.vel(i) + cross(p.ang(i), arm);
+          nodes.insert(nodes.end(), {x.x, x.y, x.z});
+          vel.insert(vel.end(), {v.x, v.y, v.z});
+        }
+        for (const auto& tri : t.surface) {
+          tris.insert(tris.end(), {base + tri[0], base + tri[1], base + tri[2]});
+          ids.push_back(p.id[i]);
+        }
+      }
+      long mine = static_cast<long>(nodes.size() / 3), offset = 0;
+      MPI_Exscan(&mine, &offset, 1, MPI_LONG, MPI_SUM, comm);
+      if (comm_rank(comm) == 0) offset = 0;
+      for (auto& k : tris) k += offset;
+      surface_nodes = f.write_rows("surface_nodes", nodes.data(), nodes.size() / 3, 3);
+      f.write_rows("surface_velocity", vel.data(), vel.size() / 3, 3);
+      surface_triangles = f.write_rows("surface_triangles", tris.data(), tris.size() / 3, 3);
+      f.write_rows("surface_id", ids.data(), ids.size(), 1);
+    }
   }
-  entries_.push_back({dem.time(), name, n});
+  entries_.push_back({dem.time(), name, n, surface_nodes, surface_triangles});
   if (comm_rank(comm) == 0) {
     std::vector<std::pair<double, std::pair<std::string, long>>> e;
     for (const auto& x : entries_) e.push_back({x.time, {x.file, x.bodies}});
     write_xdmf(dir_ + "/particles.xmf", e);
+    if (dem.shaped()) {
+      std::vector<std::tuple<double, std::string, long, long>> g;
+      for (const auto& x : entries_) g.emplace_back(x.time, x.file, x.surface_nodes, x.surface_triangles);
+      write_surface_xdmf(dir_ + "/grains.xmf", g);
+    }
   }
 }
 

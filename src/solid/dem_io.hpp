@@ -15,7 +15,9 @@ namespace tessera {
 class SnapshotSeries {
  public:
   explicit SnapshotSeries(std::string dir) : dir_(std::move(dir)) {}
-  // Collective: writes DIR/particles_NNNNNN.h5 and rewrites DIR/particles.xmf.
+  // Collective: writes DIR/particles_NNNNNN.h5 and rewrites DIR/particles.xmf; with shaped bodies
+  // also DIR/grains.xmf: each body's template surface (triangles) placed at its position and
+  // orientation, so that ParaView draws every grain's shape.
   void write(const DemSolver& dem);
   std::size_t count() const { return entries_.size(); }
 
@@ -24,6 +26,7 @@ class SnapshotSeries {
     double time;
     std::string file;
     long bodies;
+    long surface_nodes = 0, surface_triangles = 0;
   };
   std::string dir_;
   std::vector<Entry> entries_;
