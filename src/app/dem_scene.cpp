@@ -29,7 +29,7 @@ DemScene::DemScene(const ConfigNode& root, MPI_Comm comm, const std::string& cas
 
   const ConfigNode solid = root.section("solid");
   ContactModel model(solid);
-  Walls walls(solid, model);
+  Walls walls(solid, model, case_dir);
   dem_ = std::make_unique<DemSolver>(*decomp_, std::move(model), std::move(walls), DemSettings::from_config(solid));
   dem_->set_shapes(read_shapes(solid, case_dir));
 
@@ -161,7 +161,7 @@ nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolv
           const double rate = static_cast<double>(dem_->steps() - start_steps) / std::max(1e-9, wall());
           std::printf("step %ld  t %.5g s  KE %.3g J  Z %.2f  max|v| %.3g m/s  %.3g steps/s  wall %.1f s",
                       dem_->steps(), dem_->time(), stats.kinetic_translational + stats.kinetic_rotational,
-                      stats.bodies ? 2.0 * stats.contacts / stats.bodies : 0.0, stats.max_speed, rate, wall());
+                      stats.bodies ? 2.0 * stats.body_contacts / stats.bodies : 0.0, stats.max_speed, rate, wall());
           if (end_time_) std::printf("  ETA %.0f s", (*end_time_ - dem_->time()) / dem_->dt() / std::max(rate, 1e-9));
           std::printf("\n");
           std::fflush(stdout);

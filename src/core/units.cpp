@@ -44,6 +44,10 @@ constexpr std::array kUnits{
     UnitEntry{"N.s/m", Dim::damping, 1.0},
     UnitEntry{"1/s", Dim::rate, 1.0},
     UnitEntry{"rad/s", Dim::angular_velocity, 1.0},
+    UnitEntry{"N*m", Dim::moment, 1.0},
+    UnitEntry{"N.m", Dim::moment, 1.0},
+    UnitEntry{"kg*m^2", Dim::moment_of_inertia, 1.0},
+    UnitEntry{"kg.m^2", Dim::moment_of_inertia, 1.0},
 };
 
 }  // namespace
@@ -76,6 +80,10 @@ const char* si_unit(Dim d) {
       return "1/s";
     case Dim::angular_velocity:
       return "rad/s";
+    case Dim::moment:
+      return "N*m";
+    case Dim::moment_of_inertia:
+      return "kg*m^2";
   }
   return "?";
 }

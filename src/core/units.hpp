@@ -9,19 +9,21 @@ namespace tessera {
 
 // Physical dimension a key expects, spelt as its SI unit.
 enum class Dim {
-  none,              // dimensionless
-  length,            // m
-  time,              // s
-  mass,              // kg
-  density,           // kg/m^3
-  pressure,          // Pa
-  stiffness,         // N/m
-  velocity,          // m/s
-  acceleration,      // m/s^2
-  energy,            // J
-  damping,           // N s/m
-  rate,              // 1/s
-  angular_velocity,  // rad/s
+  none,               // dimensionless
+  length,             // m
+  time,               // s
+  mass,               // kg
+  density,            // kg/m^3
+  pressure,           // Pa
+  stiffness,          // N/m
+  velocity,           // m/s
+  acceleration,       // m/s^2
+  energy,             // J
+  damping,            // N s/m
+  rate,               // 1/s
+  angular_velocity,   // rad/s
+  moment,             // N m
+  moment_of_inertia,  // kg m^2
 };
 
 const char* si_unit(Dim d);

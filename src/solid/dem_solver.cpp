@@ -12,6 +12,7 @@
 
 #include "core/errors.hpp"
 #include "solid/contact_kernel.hpp"
+#include "solid/triangle_contact.hpp"
 
 namespace tessera {
 
@@ -127,6 +128,9 @@ void DemSolver::setup(bool fresh) {
     for (const auto& w : walls_.primitives())
       t_contact_ =
           std::min(t_contact_, model_.contact_duration(a, w.material, m_min, r_min, settings_.impact_velocity));
+    for (const auto& w : walls_.meshes())
+      t_contact_ =
+          std::min(t_contact_, model_.contact_duration(a, w.material, m_min, r_min, settings_.impact_velocity));
   }
   dt_ = settings_.time_step ? *settings_.time_step : t_contact_ / settings_.steps_per_contact;
   skin_ = settings_.skin ? *settings_.skin : 0.5 * r_min;
@@ -149,6 +153,7 @@ void DemSolver::setup(bool fresh) {
     const std::vector<double> pair_history = list_.history, wall_history = p_.wall_history;
     compute_forces(false);
     store_forces();
+    for (auto& m : walls_.meshes()) m.update_acceleration(settings_.gravity);
     list_.history = pair_history;
     p_.wall_history = wall_history;
   }
@@ -327,6 +332,7 @@ void DemSolver::rebuild() {
       }
     }
     if (shaped()) build_wall_list_elements(histories);
+    build_mesh_candidates();
     if (model_.law() == LawKind::linear_spring_dashpot)
       fill_pair_coefficients<LinearSpringDashpot>();
     else
@@ -438,6 +444,160 @@ void DemSolver::reduce_element_forces() {
   }
 }
 
+double DemSolver::mesh_displacement() const {
+  double d2 = 0;
+  const auto& meshes = walls_.meshes();
+  for (std::size_t m = 0; m < meshes.size() && m < mesh_nodes_build_.size(); ++m)
+    for (std::size_t k = 0; k < meshes[m].nodes.size(); ++k)
+      d2 = std::max(d2, norm2(meshes[m].nodes[k] - mesh_nodes_build_[m][k]));
+  return std::sqrt(d2);
+}
+
+void DemSolver::build_mesh_candidates() {
+  // Each owned entity (body, or contact sphere of a shaped body) against each mesh: the triangles
+  // within its radius + skin, found through a grid of the triangles' bounding boxes.
+  mesh_entity_.clear(), mesh_of_.clear(), mesh_cands_.clear();
+  mesh_cand_start_.assign(1, 0);
+  const auto& meshes = walls_.meshes();
+  mesh_nodes_build_.resize(meshes.size());
+  if (meshes.empty()) return;
+  const bool sh = shaped();
+  const std::size_t n = sh ? e_owned_ : p_.owned;
+  auto centre = [&](std::size_t e) {
+    return sh ? Vec3{k_geometry_[e].x, k_geometry_[e].y, k_geometry_[e].z} : p_.pos(e);
+  };
+  auto radius = [&](std::size_t e) { return sh ? e_r_[e] : p_.radius[e]; };
+  double r_max = 0;
+  for (std::size_t e = 0; e < n; ++e) r_max = std::max(r_max, radius(e));
+  std::vector<int> found;
+  for (std::size_t mi = 0; mi < meshes.size(); ++mi) {
+    const MeshWall& m = meshes[mi];
+    mesh_nodes_build_[mi] = m.nodes;
+    Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+    double edge = 0;
+    for (const auto& t : m.triangles)
+      for (int a = 0; a < 3; ++a) {
+        const Vec3& v = m.nodes[t[a]];
+        for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], v[d]), hi[d] = std::max(hi[d], v[d]);
+        edge = std::max(edge, norm(v - m.nodes[t[(a + 1) % 3]]));
+      }
+    const double reach = r_max + skin_;
+    double h = std::max(2 * reach, 0.5 * edge);
+    int nc[3];
+    for (;;) {
+      double cells = 1;
+      for (int d = 0; d < 3; ++d) cells *= (nc[d] = static_cast<int>((hi[d] - lo[d] + 2 * reach) / h) + 1);
+      if (cells <= 4.0 * static_cast<double>(m.triangles.size()) + 64) break;
+      h *= 1.5;
+    }
+    auto cell = [&](double x, int d) { return std::clamp(static_cast<int>((x - lo[d] + reach) / h), 0, nc[d] - 1); };
+    auto at = [&](int x, int y, int z) { return (static_cast<std::size_t>(z) * nc[1] + y) * nc[0] + x; };
+    std::vector<std::vector<int>> grid(static_cast<std::size_t>(nc[0]) * nc[1] * nc[2]);
+    for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+      int c0[3], c1[3];
+      for (int d = 0; d < 3; ++d) {
+        double a = 1e300, b = -1e300;
+        for (int v = 0; v < 3; ++v) {
+          a = std::min(a, m.nodes[m.triangles[t][v]][d]);
+          b = std::max(b, m.nodes[m.triangles[t][v]][d]);
+        }
+        c0[d] = cell(a, d), c1[d] = cell(b, d);
+      }
+      for (int z = c0[2]; z <= c1[2]; ++z)
+        for (int y = c0[1]; y <= c1[1]; ++y)
+          for (int x = c0[0]; x <= c1[0]; ++x) grid[at(x, y, z)].push_back(static_cast<int>(t));
+    }
+    for (std::size_t e = 0; e < n; ++e) {
+      const Vec3 c = centre(e);
+      const double r = radius(e) + skin_;
+      bool outside = false;
+      for (int d = 0; d < 3; ++d) outside = outside || c[d] + r < lo[d] || c[d] - r > hi[d];
+      if (outside) continue;
+      found.clear();
+      for (int z = cell(c.z - r, 2); z <= cell(c.z + r, 2); ++z)
+        for (int y = cell(c.y - r, 1); y <= cell(c.y + r, 1); ++y)
+          for (int x = cell(c.x - r, 0); x <= cell(c.x + r, 0); ++x)
+            for (const int t : grid[at(x, y, z)]) {
+              TriangleFeature f;
+              const auto& tri = m.triangles[t];
+              const Vec3 q = closest_point_on_triangle(c, m.nodes[tri[0]], m.nodes[tri[1]], m.nodes[tri[2]], f);
+              if (norm2(q - c) < r * r) found.push_back(t);
+            }
+      if (found.empty()) continue;
+      std::sort(found.begin(), found.end());
+      found.erase(std::unique(found.begin(), found.end()), found.end());
+      mesh_entity_.push_back(static_cast<std::int32_t>(e));
+      mesh_of_.push_back(static_cast<std::int32_t>(mi));
+      mesh_cands_.insert(mesh_cands_.end(), found.begin(), found.end());
+      mesh_cand_start_.push_back(static_cast<std::int32_t>(mesh_cands_.size()));
+    }
+  }
+}
+
+void DemSolver::compute_mesh_forces(double dt) {
+  // Per (entity, mesh): the contacts after de-duplication (T11), each through the wall law with
+  // the wall's velocity at the contact point; the reaction goes to the mesh (force, moment about
+  // its origin). Tangential springs are kept by (element key, mesh, contact ordinal): a sphere
+  // rolling over a flat mesh keeps its spring across triangle edges.
+  auto& meshes = walls_.meshes();
+  for (auto& m : meshes) m.force = m.moment = Vec3{};
+  const KernelGeometry* g = k_geometry_.data();
+  const KernelMotion* mo = k_motion_.data();
+  KernelForce* out = k_force_.data();
+  const bool sh = shaped();
+  ContactLanes& L = lanes_;
+  const ContactCoefficients* sets = coefficient_sets_.data();
+  std::vector<int> cands;
+  mesh_hist_next_.clear();
+  for (std::size_t k = 0; k < mesh_entity_.size(); ++k) {
+    const std::size_t e = mesh_entity_[k];
+    MeshWall& m = meshes[mesh_of_[k]];
+    const Vec3 c{g[e].x, g[e].y, g[e].z};
+    cands.assign(mesh_cands_.begin() + mesh_cand_start_[k], mesh_cands_.begin() + mesh_cand_start_[k + 1]);
+    const auto contacts = sphere_mesh_contacts(c, g[e].r, m.nodes, m.triangles, cands);
+    const std::int64_t ekey = sh ? e_key_[e] : p_.order[e];
+    std::size_t nb = 0;
+    std::uint64_t keys[ContactLanes::width];
+    Vec3 points[ContactLanes::width];
+    for (std::size_t j = 0; j < contacts.size() && nb < ContactLanes::width; ++j, ++nb) {
+      const TriangleContact& tc = contacts[j];
+      const Vec3 vw = m.velocity_at(tc.point);
+      L.dx[nb] = tc.normal.x, L.dy[nb] = tc.normal.y, L.dz[nb] = tc.normal.z;
+      L.ra[nb] = g[e].r, L.rb[nb] = tc.overlap;
+      L.vx[nb] = mo[e].vx - vw.x, L.vy[nb] = mo[e].vy - vw.y, L.vz[nb] = mo[e].vz - vw.z;
+      L.wx[nb] = mo[e].wx * g[e].r, L.wy[nb] = mo[e].wy * g[e].r, L.wz[nb] = mo[e].wz * g[e].r;
+      keys[nb] = (static_cast<std::uint64_t>(ekey) << 32) | (static_cast<std::uint64_t>(mesh_of_[k]) << 8) | j;
+      points[nb] = tc.point;
+      const auto it = mesh_hist_.find(keys[nb]);
+      const std::array<double, 3> h = it == mesh_hist_.end() ? std::array<double, 3>{0, 0, 0} : it->second;
+      L.hx[nb] = h[0], L.hy[nb] = h[1], L.hz[nb] = h[2];
+      const ContactCoefficients& cs = sets[mesh_coefficient_[k]];
+      for (int q = 0; q < 5; ++q) L.coef[q][nb] = cs.c[q];
+    }
+    if (nb == 0) continue;
+    evaluate_wall_contacts(model_.law(), L, nb, dt);
+    for (std::size_t j = 0; j < nb; ++j) {
+      mesh_hist_next_[keys[j]] = {L.hx[j], L.hy[j], L.hz[j]};
+      KernelForce& fo = out[e];
+      const Vec3 f{L.fx[j], L.fy[j], L.fz[j]};
+      fo.fx += f.x, fo.fy += f.y, fo.fz += f.z;
+      fo.tx -= L.nx[j] * L.ra[j], fo.ty -= L.ny[j] * L.ra[j], fo.tz -= L.nz[j] * L.ra[j];
+      m.force -= f;
+      m.moment -= cross(points[j] - m.origin, f);
+    }
+  }
+  if (dt > 0) mesh_hist_.swap(mesh_hist_next_);
+  // Every rank needs the load on each mesh (pivot dynamics, output).
+  std::vector<double> load;
+  for (const auto& m : meshes)
+    load.insert(load.end(), {m.force.x, m.force.y, m.force.z, m.moment.x, m.moment.y, m.moment.z});
+  MPI_Allreduce(MPI_IN_PLACE, load.data(), static_cast<int>(load.size()), MPI_DOUBLE, MPI_SUM, decomp_.comm());
+  for (std::size_t i = 0; i < meshes.size(); ++i) {
+    meshes[i].force = Vec3::load(&load[6 * i]);
+    meshes[i].moment = Vec3::load(&load[6 * i + 3]);
+  }
+}
+
 bool DemSolver::needs_rebuild() {
   double max2 = 0;
   if (shaped()) {
@@ -458,7 +618,9 @@ bool DemSolver::needs_rebuild() {
   }
   auto t = timers_.scope("reduction");
   MPI_Allreduce(MPI_IN_PLACE, &max2, 1, MPI_DOUBLE, MPI_MAX, decomp_.comm());
-  return max2 > 0.25 * skin_ * skin_;
+  if (walls_.meshes().empty()) return max2 > 0.25 * skin_ * skin_;
+  // Moving meshes: body and wall displacements add up (same wall state on every rank).
+  return std::sqrt(max2) + mesh_displacement() > 0.5 * skin_;
 }
 
 void DemSolver::integrate_first() {
@@ -601,6 +763,12 @@ void DemSolver::fill_pair_coefficients() {
     const std::size_t e = wall_body_[k];
     wall_coefficient_[k] = lookup({p_.material[body(e)], prims[wall_slot_[k]].material, p_.mass[body(e)], radius(e)});
   }
+  const auto& meshes = walls_.meshes();
+  mesh_coefficient_.resize(mesh_entity_.size());
+  for (std::size_t k = 0; k < mesh_entity_.size(); ++k) {
+    const std::size_t e = mesh_entity_[k];
+    mesh_coefficient_[k] = lookup({p_.material[body(e)], meshes[mesh_of_[k]].material, p_.mass[body(e)], radius(e)});
+  }
 }
 
 void DemSolver::compute_forces(bool update_history) {
@@ -613,6 +781,7 @@ void DemSolver::compute_forces(bool update_history) {
   {
     auto t = timers_.scope("wall_forces");
     compute_wall_forces(dt);
+    if (!walls_.meshes().empty()) compute_mesh_forces(dt);
   }
   if (shaped()) reduce_element_forces();
 }
@@ -762,6 +931,10 @@ void DemSolver::step() {
     auto t = timers_.scope("integrate");
     integrate_first();
     if (shaped()) update_elements(0, p_.owned);
+    for (auto& m : walls_.meshes()) {
+      if (m.motion == MeshWall::Motion::pivot) m.theta_dot += 0.5 * dt_ * m.theta_ddot;
+      m.advance(dt_);
+    }
   }
   if (needs_rebuild()) {
     rebuild();
@@ -774,6 +947,13 @@ void DemSolver::step() {
   {
     auto t = timers_.scope("integrate");
     integrate_second();
+    for (auto& m : walls_.meshes()) {
+      m.update_acceleration(settings_.gravity);
+      if (m.motion == MeshWall::Motion::pivot) {
+        m.theta_dot += 0.5 * dt_ * m.theta_ddot;
+        m.omega = m.axis * m.theta_dot;
+      }
+    }
   }
   time_ += dt_;
   ++steps_;

@@ -21,7 +21,9 @@
 #pragma once
 #include <mpi.h>
 
+#include <array>
 #include <optional>
+#include <unordered_map>
 #include <vector>
 
 #include "core/config.hpp"
@@ -69,6 +71,7 @@ class DemSolver {
   const ParticleStore& particles() const { return p_; }
   const ContactModel& model() const { return model_; }
   const Walls& walls() const { return walls_; }
+  Walls& walls() { return walls_; }
   const Decomposition& decomposition() const { return decomp_; }
   PhaseTimers& timers() { return timers_; }
 
@@ -132,6 +135,10 @@ class DemSolver {
   void update_elements(std::size_t first_body, std::size_t end_body);
   void build_wall_list_elements(const HistoryMap& extra);
   void reduce_element_forces();
+  // Triangle-mesh walls (T14): candidates at rebuild, forces each step, motion.
+  void build_mesh_candidates();
+  void compute_mesh_forces(double dt);
+  double mesh_displacement() const;  // largest node displacement since the last build
   void rotate_shaped(std::size_t i, const double* torque, double h, double dt);
   bool anisotropic(int shape) const { return shape > 0 && anisotropic_[shape]; }
 
@@ -186,6 +193,11 @@ class DemSolver {
   std::vector<PairKey> wall_keys_;  // per wall entry (wall_body_ then holds the element)
   std::vector<double> wall_hist_;   // 3 per wall entry
   std::vector<KernelForce> b_force_;
+  // Mesh walls: (entity, mesh) pairs within reach at the last rebuild, their candidate triangles,
+  // coefficients; tangential histories by (element key, mesh, contact ordinal).
+  std::vector<std::int32_t> mesh_entity_, mesh_of_, mesh_cand_start_, mesh_cands_, mesh_coefficient_;
+  std::unordered_map<std::uint64_t, std::array<double, 3>> mesh_hist_, mesh_hist_next_;
+  std::vector<std::vector<Vec3>> mesh_nodes_build_;
   double dt_ = 0, time_ = 0, skin_ = 0, r_max_ = 0, t_contact_ = 0;
   long steps_ = 0;
 };

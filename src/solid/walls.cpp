@@ -1,7 +1,11 @@
 // SPDX-License-Identifier: MIT
 #include "solid/walls.hpp"
 
+#include <filesystem>
+
 #include "core/errors.hpp"
+#include "solid/gmsh_reader.hpp"
+#include "solid/stl_reader.hpp"
 
 namespace tessera {
 
@@ -23,11 +27,63 @@ void Walls::add_box_inside(const Vec3& lo, const Vec3& hi, int material) {
   }
 }
 
-Walls::Walls(const ConfigNode& solid, const ContactModel& model) {
+namespace {
+
+MeshWall read_mesh_wall(const ConfigNode& w, int material, const std::string& case_dir) {
+  MeshWall m;
+  m.key = w.path();
+  m.material = material;
+  std::filesystem::path path = w.text("file");
+  if (path.is_relative()) path = std::filesystem::path(case_dir) / path;
+  const double scale = w.real("scale", Dim::none, Range::positive(), 1.0);
+  TetMesh mesh;
+  const std::string ext = path.extension().string();
+  if (ext == ".stl" || ext == ".STL") {
+    mesh = read_stl(path.string(), scale);
+  } else if (ext == ".msh") {
+    mesh = read_gmsh(path.string());
+    for (auto& p : mesh.nodes) p = p * scale;
+  } else {
+    w.fail("file", "an STL (.stl) or Gmsh (.msh) surface mesh");
+  }
+  if (mesh.triangles.empty()) w.fail("file", "a mesh with triangles");
+  m.triangles = mesh.triangles;
+  const ConfigNode motion = w.section("motion");
+  const std::string type = motion.choice("type", {"fixed", "prescribed", "pivot"});
+  Vec3 origin;
+  if (type == "prescribed") {
+    m.motion = MeshWall::Motion::prescribed;
+    origin = motion.vec3("centre", Dim::length, Vec3{});
+    m.velocity = motion.vec3("velocity", Dim::velocity, Vec3{});
+    m.omega = motion.vec3("angular_velocity", Dim::angular_velocity, Vec3{});
+  } else if (type == "pivot") {
+    m.motion = MeshWall::Motion::pivot;
+    origin = motion.vec3("pivot", Dim::length);
+    m.axis = motion.vec3("axis", Dim::none);
+    if (norm(m.axis) == 0.0) motion.fail("axis", "a non-zero vector");
+    m.axis = m.axis / norm(m.axis);
+    m.inertia = motion.real("moment_of_inertia", Dim::moment_of_inertia, Range::positive());
+    m.applied_moment = motion.real("applied_moment", Dim::moment, Range{-1e300, 1e300, false, false}, 0.0);
+    m.theta_dot = motion.real("angular_velocity", Dim::angular_velocity, Range{-1e300, 1e300, false, false}, 0.0);
+    m.mass = motion.real("mass", Dim::mass, Range::non_negative(), 0.0);
+    m.centre_of_mass = motion.vec3("centre_of_mass", Dim::length, origin) - origin;
+  }
+  m.origin = origin;
+  for (const auto& p : mesh.nodes) m.local.push_back(p - origin);
+  return m;
+}
+
+}  // namespace
+
+Walls::Walls(const ConfigNode& solid, const ContactModel& model, const std::string& case_dir) {
   for (const auto& w : solid.list("walls")) {
-    const std::string type = w.choice("type", {"plane", "box"});
+    const std::string type = w.choice("type", {"plane", "box", "mesh"});
     const int mat = model.material_index(w.text("material"), w.key_path("material"));
     const std::size_t first = prims_.size();
+    if (type == "mesh") {
+      add_mesh(read_mesh_wall(w, mat, case_dir));
+      continue;
+    }
     if (type == "plane") {
       const Vec3 point = w.vec3("point", Dim::length);
       const Vec3 normal = w.vec3("normal", Dim::none);
@@ -51,7 +107,22 @@ Walls::Walls(const ConfigNode& solid, const ContactModel& model) {
   }
 }
 
+void Walls::add_mesh(MeshWall m) {
+  if (m.motion == MeshWall::Motion::pivot) {
+    m.q0 = m.q;  // origin: the pivot
+    m.omega = m.axis * m.theta_dot;
+  }
+  m.place();
+  meshes_.push_back(std::move(m));
+}
+
 void Walls::check_pairs(const ContactModel& model, const std::vector<int>& body_materials) const {
+  for (const auto& m : meshes_)
+    for (int b : body_materials)
+      if (!model.has_pair(b, m.material))
+        throw InputError("solid.contact.pairs", "",
+                         "an entry for materials [" + model.materials()[b].name + ", " +
+                             model.materials()[m.material].name + "] (mesh wall " + m.key + ")");
   for (const auto& w : prims_)
     for (int m : body_materials)
       if (!model.has_pair(m, w.material))

@@ -12,6 +12,7 @@
 #include "core/config.hpp"
 #include "core/vec3.hpp"
 #include "solid/contact_model.hpp"
+#include "solid/mesh_walls.hpp"
 
 namespace tessera {
 
@@ -49,18 +50,23 @@ struct WallPrimitive {
 class Walls {
  public:
   Walls() = default;
-  // Reads solid.walls: a list of {type: plane|box, ...}.
-  Walls(const ConfigNode& solid, const ContactModel& model);
+  // Reads solid.walls: a list of {type: plane|box|mesh, ...}; case_dir resolves mesh files.
+  Walls(const ConfigNode& solid, const ContactModel& model, const std::string& case_dir = ".");
   void add_plane(const Vec3& point, const Vec3& normal, int material);
   void add_box_inside(const Vec3& lo, const Vec3& hi, int material);
 
   const std::vector<WallPrimitive>& primitives() const { return prims_; }
+  // Triangle-mesh walls (T14); their motion state lives here.
+  void add_mesh(MeshWall m);
+  const std::vector<MeshWall>& meshes() const { return meshes_; }
+  std::vector<MeshWall>& meshes() { return meshes_; }
   int slots() const { return static_cast<int>(prims_.size()); }
   // Every body material must have contact parameters with every wall material.
   void check_pairs(const ContactModel& model, const std::vector<int>& body_materials) const;
 
  private:
   std::vector<WallPrimitive> prims_;
+  std::vector<MeshWall> meshes_;
 };
 
 }  // namespace tessera
