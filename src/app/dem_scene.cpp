@@ -211,6 +211,21 @@ nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolv
                                         static_cast<double>(dem_->steps() - start_steps) /
                                         std::max(loop_seconds, 1e-9) / decomp_->size();
   s["quantities"] = q;
+  // Mesh walls: the load the bodies put on each at the last step, and a pivot's angle and speed.
+  if (!dem_->walls().meshes().empty()) {
+    nlohmann::json meshes = nlohmann::json::array();
+    for (const auto& m : dem_->walls().meshes()) {
+      nlohmann::json e{{"key", m.key},
+                       {"force", {m.force.x, m.force.y, m.force.z}},
+                       {"moment_about_origin", {m.moment.x, m.moment.y, m.moment.z}}};
+      if (m.motion == MeshWall::Motion::pivot) {
+        e["angle"] = m.theta;
+        e["angular_velocity"] = m.theta_dot;
+      }
+      meshes.push_back(e);
+    }
+    s["mesh_walls"] = meshes;
+  }
   nlohmann::json timers;
   for (const auto& [phase, st] : dem_->timers().reduce(comm))
     timers[phase] = {{"min", st.min}, {"avg", st.avg}, {"max", st.max}};

@@ -28,5 +28,13 @@ constexpr std::int64_t kWallKeyBase = (std::int64_t{1} << 32) - 1024;
 inline PairKey wall_key(std::int64_t element_key, int slot) {
   return (static_cast<PairKey>(element_key) << 32) | static_cast<PairKey>(kWallKeyBase + slot);
 }
+// Mesh-wall contacts: (element key, base + 256 + 8 mesh + ordinal of the contact with that mesh).
+// Wall slots stay below 256 (planes and boxes), meshes below kMaxMeshWalls.
+constexpr int kMaxWallSlots = 256, kMaxMeshWalls = 96, kMeshContactsPerSphere = 8;
+inline PairKey mesh_key(std::int64_t element_key, int mesh, int ordinal) {
+  return (static_cast<PairKey>(element_key) << 32) |
+         static_cast<PairKey>(kWallKeyBase + kMaxWallSlots + kMeshContactsPerSphere * mesh + ordinal);
+}
+inline bool is_mesh_key(PairKey k) { return key_high(k) >= kWallKeyBase + kMaxWallSlots; }
 
 }  // namespace tessera

@@ -18,6 +18,8 @@ namespace tessera {
 
 namespace fs = std::filesystem;
 
+constexpr int kMeshStateSize = 16;  // origin, q, velocity, omega, theta, theta', theta''
+
 void write_file_atomically(const std::string& path, const std::string& text) {
   const std::string tmp = path + ".tmp";
   {
@@ -187,7 +189,17 @@ void write_checkpoint(const std::string& path, const DemSolver& dem, const Check
     }
     f.write_rows("pair_keys", keys.data(), keys.size(), 1);
     f.write_rows("pair_history", hist.data(), keys.size(), 3);
-    f.set_attribute("format", std::string("tessera-dem-checkpoint-2"));
+    // Mesh walls' motion state (the same on every rank; rank 0 writes it).
+    std::vector<double> mesh;
+    if (comm_rank(comm) == 0)
+      for (const auto& m : dem.walls().meshes()) {
+        const double row[kMeshStateSize] = {m.origin.x, m.origin.y,   m.origin.z,   m.q.w,        m.q.x,     m.q.y,
+                                            m.q.z,      m.velocity.x, m.velocity.y, m.velocity.z, m.omega.x, m.omega.y,
+                                            m.omega.z,  m.theta,      m.theta_dot,  m.theta_ddot};
+        mesh.insert(mesh.end(), row, row + kMeshStateSize);
+      }
+    f.write_rows("mesh_state", mesh.data(), mesh.size() / kMeshStateSize, kMeshStateSize);
+    f.set_attribute("format", std::string("tessera-dem-checkpoint-3"));
     f.set_attribute("time", dem.time());
     f.set_attribute("steps", dem.steps());
     f.set_attribute("wall_slots", static_cast<long>(p.wall_slots));
@@ -204,8 +216,28 @@ void write_checkpoint(const std::string& path, const DemSolver& dem, const Check
 CheckpointExtras read_checkpoint(const std::string& path, DemSolver& dem) {
   MPI_Comm comm = dem.decomposition().comm();
   H5File f = H5File::open_read(path, comm);
-  if (f.attribute_string("format") != "tessera-dem-checkpoint-2")
-    throw InputError("restart", path, "a Tessera DEM checkpoint (format tessera-dem-checkpoint-2)");
+  const std::string format = f.attribute_string("format");
+  if (format != "tessera-dem-checkpoint-3" && format != "tessera-dem-checkpoint-2")
+    throw InputError("restart", path, "a Tessera DEM checkpoint (format tessera-dem-checkpoint-3 or -2)");
+  auto& meshes = dem.walls().meshes();
+  if (f.has("mesh_state") || !meshes.empty()) {
+    int mcols = 0;
+    const auto mesh = f.has("mesh_state") ? f.read_all<double>("mesh_state", mcols) : std::vector<double>{};
+    if (mesh.size() != meshes.size() * kMeshStateSize)
+      throw InputError(
+          "restart", path,
+          "a checkpoint made with the same mesh walls as this case (" + std::to_string(meshes.size()) + ")");
+    for (std::size_t k = 0; k < meshes.size(); ++k) {
+      const double* r = &mesh[k * kMeshStateSize];
+      MeshWall& m = meshes[k];
+      m.origin = {r[0], r[1], r[2]};
+      m.q = {r[3], r[4], r[5], r[6]};
+      m.velocity = {r[7], r[8], r[9]};
+      m.omega = {r[10], r[11], r[12]};
+      m.theta = r[13], m.theta_dot = r[14], m.theta_ddot = r[15];
+      m.place();
+    }
+  }
   ParticleStore& p = dem.particles();
   if (f.attribute_long("wall_slots") != p.wall_slots)
     throw InputError(

@@ -104,6 +104,12 @@ void DemSolver::setup(bool fresh) {
   long n_local = static_cast<long>(p_.owned), n = 0;
   MPI_Allreduce(&n_local, &n, 1, MPI_LONG, MPI_SUM, comm);
   if (n == 0) throw InputError("bodies", "0", "at least one body in the domain");
+  if (walls_.slots() > kMaxWallSlots)
+    throw InputError("solid.walls", std::to_string(walls_.slots()) + " wall planes",
+                     "at most " + std::to_string(kMaxWallSlots) + " planes (a box counts 6)");
+  if (walls_.meshes().size() > static_cast<std::size_t>(kMaxMeshWalls))
+    throw InputError("solid.walls", std::to_string(walls_.meshes().size()) + " meshes",
+                     "at most " + std::to_string(kMaxMeshWalls) + " mesh walls");
   if (n * key_stride_ >= kWallKeyBase)
     throw InputError("bodies", std::to_string(n),
                      "fewer than 2^32 / (contact spheres per body) bodies (element keys are 32-bit)");
@@ -166,6 +172,8 @@ HistoryMap DemSolver::histories() const {
     const double* w = &wall_hist_[3 * k];
     if (w[0] != 0.0 || w[1] != 0.0 || w[2] != 0.0) h[wall_keys_[k]] = {w[0], w[1], w[2]};
   }
+  for (const auto& [key, w] : mesh_hist_)
+    if (w[0] != 0.0 || w[1] != 0.0 || w[2] != 0.0) h[key] = w;
   return h;
 }
 
@@ -272,6 +280,8 @@ void DemSolver::rebuild() {
         if (leaving[body_of(wall_body_[k])] && (h[0] != 0.0 || h[1] != 0.0 || h[2] != 0.0))
           histories[wall_keys_[k]] = {h[0], h[1], h[2]};
       }
+      // Mesh-wall springs (few): all of them travel through the map; each rank keeps its own below.
+      for (const auto& [key, h] : mesh_hist_) histories.emplace(key, h);
     }
   }
   {
@@ -279,6 +289,8 @@ void DemSolver::rebuild() {
     halo_.migrate(p_, histories);
     sort_owned_by_order();
   }
+  for (const auto& [key, h] : histories)
+    if (is_mesh_key(key)) mesh_hist_.emplace(key, h);
   {
     auto t = timers_.scope("ghost_comm");
     halo_.build_ghosts(p_, r_max_ + skin_);
@@ -549,6 +561,9 @@ void DemSolver::compute_mesh_forces(double dt) {
   const ContactCoefficients* sets = coefficient_sets_.data();
   std::vector<int> cands;
   mesh_hist_next_.clear();
+  // The load on each mesh is summed over all contacts in key order, on every rank: the same bits
+  // whatever the decomposition (pivot dynamics stay rank-count independent).
+  std::vector<double> loads;  // per contact: key (2 x 32 bits), mesh, force, moment
   for (std::size_t k = 0; k < mesh_entity_.size(); ++k) {
     const std::size_t e = mesh_entity_[k];
     MeshWall& m = meshes[mesh_of_[k]];
@@ -559,14 +574,14 @@ void DemSolver::compute_mesh_forces(double dt) {
     std::size_t nb = 0;
     std::uint64_t keys[ContactLanes::width];
     Vec3 points[ContactLanes::width];
-    for (std::size_t j = 0; j < contacts.size() && nb < ContactLanes::width; ++j, ++nb) {
+    for (std::size_t j = 0; j < contacts.size() && nb < kMeshContactsPerSphere; ++j, ++nb) {
       const TriangleContact& tc = contacts[j];
       const Vec3 vw = m.velocity_at(tc.point);
       L.dx[nb] = tc.normal.x, L.dy[nb] = tc.normal.y, L.dz[nb] = tc.normal.z;
       L.ra[nb] = g[e].r, L.rb[nb] = tc.overlap;
       L.vx[nb] = mo[e].vx - vw.x, L.vy[nb] = mo[e].vy - vw.y, L.vz[nb] = mo[e].vz - vw.z;
       L.wx[nb] = mo[e].wx * g[e].r, L.wy[nb] = mo[e].wy * g[e].r, L.wz[nb] = mo[e].wz * g[e].r;
-      keys[nb] = (static_cast<std::uint64_t>(ekey) << 32) | (static_cast<std::uint64_t>(mesh_of_[k]) << 8) | j;
+      keys[nb] = mesh_key(ekey, mesh_of_[k], static_cast<int>(j));
       points[nb] = tc.point;
       const auto it = mesh_hist_.find(keys[nb]);
       const std::array<double, 3> h = it == mesh_hist_.end() ? std::array<double, 3>{0, 0, 0} : it->second;
@@ -582,19 +597,34 @@ void DemSolver::compute_mesh_forces(double dt) {
       const Vec3 f{L.fx[j], L.fy[j], L.fz[j]};
       fo.fx += f.x, fo.fy += f.y, fo.fz += f.z;
       fo.tx -= L.nx[j] * L.ra[j], fo.ty -= L.ny[j] * L.ra[j], fo.tz -= L.nz[j] * L.ra[j];
-      m.force -= f;
-      m.moment -= cross(points[j] - m.origin, f);
+      const Vec3 moment = cross(points[j] - m.origin, f);
+      loads.insert(loads.end(), {static_cast<double>(keys[j] >> 32), static_cast<double>(keys[j] & 0xffffffffULL),
+                                 static_cast<double>(mesh_of_[k]), -f.x, -f.y, -f.z, -moment.x, -moment.y, -moment.z});
     }
   }
   if (dt > 0) mesh_hist_.swap(mesh_hist_next_);
   // Every rank needs the load on each mesh (pivot dynamics, output).
-  std::vector<double> load;
-  for (const auto& m : meshes)
-    load.insert(load.end(), {m.force.x, m.force.y, m.force.z, m.moment.x, m.moment.y, m.moment.z});
-  MPI_Allreduce(MPI_IN_PLACE, load.data(), static_cast<int>(load.size()), MPI_DOUBLE, MPI_SUM, decomp_.comm());
-  for (std::size_t i = 0; i < meshes.size(); ++i) {
-    meshes[i].force = Vec3::load(&load[6 * i]);
-    meshes[i].moment = Vec3::load(&load[6 * i + 3]);
+  constexpr int stride = 9;
+  int size = 1, mine = static_cast<int>(loads.size());
+  MPI_Comm comm = decomp_.comm();
+  MPI_Comm_size(comm, &size);
+  std::vector<int> counts(size), displs(size, 0);
+  MPI_Allgather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, comm);
+  for (int r = 1; r < size; ++r) displs[r] = displs[r - 1] + counts[r - 1];
+  std::vector<double> all(static_cast<std::size_t>(displs[size - 1] + counts[size - 1]));
+  MPI_Allgatherv(loads.data(), mine, MPI_DOUBLE, all.data(), counts.data(), displs.data(), MPI_DOUBLE, comm);
+  const std::size_t n = all.size() / stride;
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return all[a * stride] != all[b * stride] ? all[a * stride] < all[b * stride]
+                                              : all[a * stride + 1] < all[b * stride + 1];
+  });
+  for (const auto c : order) {
+    const double* r = &all[c * stride];
+    MeshWall& m = meshes[static_cast<std::size_t>(r[2])];
+    m.force += Vec3{r[3], r[4], r[5]};
+    m.moment += Vec3{r[6], r[7], r[8]};
   }
 }
 

@@ -2,6 +2,7 @@
 // A small, violent deposition for parallel tests: 1088 grains fall at 100 g for a few thousand
 // steps, so contacts form, slide and break, and bodies cross sub-domain faces in every direction.
 #pragma once
+#include <string>
 
 namespace tessera::test {
 
@@ -61,5 +62,31 @@ deposition:
   settled_kinetic_energy: 1e-30
 run: {end_time: 1.0, check_interval: 1 ms}
 )";
+
+// The violent deposition onto triangle-mesh walls read from STL files: a V-shaped valley floor
+// (concave: two contacts along its bottom) and a paddle turning about a pivot under the grains'
+// impacts (tests/data). MESH_DIR is replaced by the test with the data directory.
+inline const char* kMeshDepositionWalls = R"(
+  walls:
+    - {type: box, min: [0, 0, 0], max: [6 mm, 6 mm, 12 mm], material: wall}
+    - {type: mesh, file: MESH_DIR/valley.stl, scale: 1e-3, material: wall, motion: {type: fixed}}
+    - type: mesh
+      file: MESH_DIR/paddle.stl
+      scale: 1e-3
+      material: wall
+      motion: {type: pivot, pivot: [3 mm, 0, 7 mm], axis: [0, 1, 0], moment_of_inertia: 2e-10, angular_velocity: 3.0}
+)";
+
+inline std::string mesh_case() {
+  // kViolentDeposition with its box plus the STL valley and pivoted paddle, grains starting above.
+  std::string c = kViolentDeposition;
+  const std::string walls = "  walls: [{type: box, min: [0, 0, 0], max: [6 mm, 6 mm, 12 mm], material: wall}]\n";
+  std::string mesh = kMeshDepositionWalls;
+  for (std::size_t at; (at = mesh.find("MESH_DIR")) != std::string::npos;)
+    mesh.replace(at, 8, std::string(TESSERA_SOURCE_DIR) + "/tests/data");
+  c.replace(c.find(walls), walls.size(), mesh.substr(1));
+  c.replace(c.find("region_min: [0, 0, 0]"), 21, "region_min: [0, 0, 7.4 mm]");
+  return c;
+}
 
 }  // namespace tessera::test

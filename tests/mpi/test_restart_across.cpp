@@ -40,5 +40,21 @@ TEST(Restart, ShapedGrainsContinueOnAnotherRankCount) {
   }
 }
 
+// Mesh walls: the paddle's angle and speed and the mesh contacts' springs are in the checkpoint.
+TEST(Restart, MeshWallsContinueOnAnotherRankCount) {
+  const int size = world_size(), rank = world_rank();
+  ASSERT_GT(size, 1) << "run under mpirun -n 2 or more";
+  const std::string dir = (std::filesystem::temp_directory_path() / "tessera_restart_across_mesh").string();
+  const std::string text = mesh_case();
+  const BodyStates straight = run_scene_on(1, text, {"run.max_steps=2500"}, dir + "/straight");
+  run_scene_on(size, text, {"run.max_steps=1700"}, dir + "/first");
+  const BodyStates resumed =
+      run_scene_on(1, text, {"run.max_steps=2500"}, dir + "/second", dir + "/first/checkpoint.h5");
+  if (rank == 0) {
+    EXPECT_GT(straight.size(), 0u);
+    EXPECT_EQ(count_differences(straight, resumed, "mesh restart on 1 rank"), 0);
+  }
+}
+
 }  // namespace
 }  // namespace tessera::test
