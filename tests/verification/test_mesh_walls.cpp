@@ -10,6 +10,8 @@
 #include <cstdio>
 #include <numbers>
 
+#include "core/config.hpp"
+#include "core/errors.hpp"
 #include "support/dem_fixture.hpp"
 
 namespace tessera::test {
@@ -133,6 +135,43 @@ TEST(MeshWalls, RisingPlateCarriesASphereAndFeelsItsWeight) {
   EXPECT_NEAR(-m.force.z / weight, 1.0, 1e-3);
   EXPECT_NEAR(p.x[2] - m.nodes[0].z, R, 0.01 * R);  // resting on it (static overlap m g / k)
   EXPECT_GT(rig.dem->list_builds(), 3u);            // the moving plate triggered rebuilds
+}
+
+TEST(MeshWalls, ReadFromStlAndGmshThroughTheCaseFile) {
+  const std::string data = std::string(TESSERA_SOURCE_DIR) + "/tests/data/";
+  const std::string text = R"(
+solid:
+  materials: {sand: {density: 2650}, wall: {density: 2650}}
+  contact:
+    law: hooke
+    pairs: [{materials: [sand, wall], normal_stiffness: 1e4, restitution: 0.5, friction: 0.5}]
+  walls:
+    - {type: mesh, file: valley.stl, scale: 1e-3, material: wall, motion: {type: fixed}}
+    - type: mesh
+      file: grain_spheroid.msh
+      scale: 1e-3
+      material: wall
+      motion: {type: prescribed, velocity: [0, 0, 1 mm/s], angular_velocity: [0, 0, 2 rad/s], centre: [1 mm, 0, 0]}
+)";
+  Config c = Config::parse(text);
+  const ConfigNode solid = c.root().section("solid");
+  ContactModel model(solid);
+  Walls walls(solid, model, data);
+  ASSERT_EQ(walls.meshes().size(), 2u);
+  EXPECT_EQ(walls.meshes()[0].triangles.size(), 4u);
+  EXPECT_NEAR(walls.meshes()[0].nodes[1].x, 3e-3, 1e-15);  // scaled from mm
+  EXPECT_GT(walls.meshes()[1].triangles.size(), 50u);      // the spheroid's surface triangles
+  EXPECT_EQ(walls.meshes()[1].motion, MeshWall::Motion::prescribed);
+  EXPECT_NEAR(walls.meshes()[1].omega.z, 2.0, 1e-15);
+  // A file that is not a surface mesh is refused, naming the key.
+  Config bad = Config::parse(std::string(text).replace(text.find("valley.stl"), 10, "valley.obj"));
+  const ConfigNode bs = bad.root().section("solid");
+  try {
+    Walls w(bs, ContactModel(bs), data);
+    FAIL() << "accepted a .obj mesh";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("solid.walls"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
