@@ -103,6 +103,9 @@ void write_surface_xdmf(const std::string& path, const std::vector<std::tuple<do
 }  // namespace
 
 void SnapshotSeries::write(const DemSolver& dem) {
+  // One snapshot per time: a run ending on a snapshot time does not write the same state twice
+  // (two grids at one time make ParaView's XDMF reader return an empty multiblock).
+  if (!entries_.empty() && entries_.back().time == dem.time()) return;
   MPI_Comm comm = dem.decomposition().comm();
   const ParticleStore& p = dem.particles();
   char name[64];
