@@ -630,21 +630,24 @@ void DemSolver::compute_mesh_forces(double dt) {
 
 bool DemSolver::needs_rebuild() {
   double max2 = 0;
-  if (shaped()) {
-    // Contact spheres' displacement (translation and rotation).
-    const double* x0 = e_x_build_.data();
-    for (std::size_t e = 0; e < e_owned_; ++e) {
-      const KernelGeometry& g = k_geometry_[e];
-      const double dx = g.x - x0[3 * e], dy = g.y - x0[3 * e + 1], dz = g.z - x0[3 * e + 2];
+  {
+    auto scope = timers_.scope("neighbor");  // the displacement check is part of the list's cost
+    if (shaped()) {
+      // Contact spheres' displacement (translation and rotation).
+      const double* x0 = e_x_build_.data();
+      for (std::size_t e = 0; e < e_owned_; ++e) {
+        const KernelGeometry& g = k_geometry_[e];
+        const double dx = g.x - x0[3 * e], dy = g.y - x0[3 * e + 1], dz = g.z - x0[3 * e + 2];
+        max2 = std::max(max2, dx * dx + dy * dy + dz * dz);
+      }
+    }
+    const double* x = p_.x.data();
+    const double* x0 = x_build_.data();
+    const std::size_t n = shaped() ? 0 : p_.owned;
+    for (std::size_t k = 0; k < 3 * n; k += 3) {
+      const double dx = x[k] - x0[k], dy = x[k + 1] - x0[k + 1], dz = x[k + 2] - x0[k + 2];
       max2 = std::max(max2, dx * dx + dy * dy + dz * dz);
     }
-  }
-  const double* x = p_.x.data();
-  const double* x0 = x_build_.data();
-  const std::size_t n = shaped() ? 0 : p_.owned;
-  for (std::size_t k = 0; k < 3 * n; k += 3) {
-    const double dx = x[k] - x0[k], dy = x[k + 1] - x0[k + 1], dz = x[k + 2] - x0[k + 2];
-    max2 = std::max(max2, dx * dx + dy * dy + dz * dz);
   }
   auto t = timers_.scope("reduction");
   MPI_Allreduce(MPI_IN_PLACE, &max2, 1, MPI_DOUBLE, MPI_MAX, decomp_.comm());
@@ -813,7 +816,10 @@ void DemSolver::compute_forces(bool update_history) {
     compute_wall_forces(dt);
     if (!walls_.meshes().empty()) compute_mesh_forces(dt);
   }
-  if (shaped()) reduce_element_forces();
+  if (shaped()) {
+    auto t = timers_.scope("contact_forces");  // element forces into body forces and torques
+    reduce_element_forces();
+  }
 }
 
 void DemSolver::compute_pair_forces(double dt, bool update_history) {
