@@ -57,6 +57,9 @@ void DemSolver::set_shapes(std::vector<ShapeTemplate> templates) {
   // free rotation of a spherical top is uniform, and a one-sphere template then moves bitwise as
   // the plain sphere.
   anisotropic_.assign(shapes_.size() + 1, 0);
+  arm_.assign(shapes_.size() + 1, 0.0);
+  for (std::size_t k = 0; k < shapes_.size(); ++k)
+    for (const auto& c : shapes_[k].spheres) arm_[k + 1] = std::max(arm_[k + 1], norm(c));
   for (std::size_t k = 0; k < shapes_.size(); ++k) {
     const Vec3 I = shapes_[k].inertia_per_density;
     const double lo = std::min({I.x, I.y, I.z}), hi = std::max({I.x, I.y, I.z});
@@ -311,7 +314,7 @@ void DemSolver::rebuild() {
       e.body = e_body_.data();
       e.body_mass = p_.mass.data();
       list_.build(e, skin_, histories);
-      e_x_build_.assign(e_x_.begin(), e_x_.begin() + 3 * static_cast<std::ptrdiff_t>(e_owned_));
+      q_build_.assign(p_.q.begin(), p_.q.begin() + 4 * static_cast<std::ptrdiff_t>(p_.owned));
     } else {
       list_.build(p_, skin_, histories);
     }
@@ -376,19 +379,15 @@ void DemSolver::build_elements() {
 }
 
 void DemSolver::update_elements(std::size_t first_body, std::size_t end_body) {
-  // Element e of body i: arm = R(q) c_e, x_e = x + arm, v_e = v + w x arm, written to the kernel
-  // mirrors (the elements' only per-step storage).
+  // Element e of body i: arm = R(q) c_e, x_e = x + arm, written to the kernel mirror (the elements'
+  // only per-step storage). Velocities are made only for elements in contact (element_motion).
   KernelGeometry* __restrict g = k_geometry_.data();
-  KernelMotion* __restrict m = k_motion_.data();
   for (std::size_t i = first_body; i < end_body; ++i) {
     const int sh = p_.shape[i];
     const double x = p_.x[3 * i], y = p_.x[3 * i + 1], z = p_.x[3 * i + 2];
-    const double vx = p_.v[3 * i], vy = p_.v[3 * i + 1], vz = p_.v[3 * i + 2];
-    const double wx = p_.omega[3 * i], wy = p_.omega[3 * i + 1], wz = p_.omega[3 * i + 2];
     const std::size_t e0 = e_first_[i], e1 = e_first_[i + 1];
     if (sh == 0) {
       g[e0] = {x, y, z, e_r_[e0]};
-      m[e0] = {vx, vy, vz, wx, wy, wz};
       continue;
     }
     const double qw = p_.q[4 * i], qx = p_.q[4 * i + 1], qy = p_.q[4 * i + 2], qz = p_.q[4 * i + 3];
@@ -403,9 +402,22 @@ void DemSolver::update_elements(std::size_t first_body, std::size_t end_body) {
       const double ay = r10 * c->x + r11 * c->y + r12 * c->z;
       const double az = r20 * c->x + r21 * c->y + r22 * c->z;
       g[e] = {x + ax, y + ay, z + az, r};
-      m[e] = {vx + (wy * az - wz * ay), vy + (wz * ax - wx * az), vz + (wx * ay - wy * ax), wx, wy, wz};
     }
   }
+}
+
+void DemSolver::element_motion(std::size_t e) {
+  // v_e = v + w x (x_e - x), w: the velocity of contact sphere e from its body's.
+  const std::size_t i = static_cast<std::size_t>(e_body_[e]);
+  const KernelGeometry& g = k_geometry_[e];
+  const double ax = g.x - p_.x[3 * i], ay = g.y - p_.x[3 * i + 1], az = g.z - p_.x[3 * i + 2];
+  const double wx = p_.omega[3 * i], wy = p_.omega[3 * i + 1], wz = p_.omega[3 * i + 2];
+  k_motion_[e] = {p_.v[3 * i] + (wy * az - wz * ay),
+                  p_.v[3 * i + 1] + (wz * ax - wx * az),
+                  p_.v[3 * i + 2] + (wx * ay - wy * ax),
+                  wx,
+                  wy,
+                  wz};
 }
 
 void DemSolver::build_wall_list_elements(const HistoryMap& extra) {
@@ -570,6 +582,8 @@ void DemSolver::compute_mesh_forces(double dt) {
     const Vec3 c{g[e].x, g[e].y, g[e].z};
     cands.assign(mesh_cands_.begin() + mesh_cand_start_[k], mesh_cands_.begin() + mesh_cand_start_[k + 1]);
     const auto contacts = sphere_mesh_contacts(c, g[e].r, m.nodes, m.triangles, cands);
+    if (contacts.empty()) continue;
+    if (sh) element_motion(e);
     const std::int64_t ekey = sh ? e_key_[e] : p_.order[e];
     std::size_t nb = 0;
     std::uint64_t keys[ContactLanes::width];
@@ -633,12 +647,18 @@ bool DemSolver::needs_rebuild() {
   {
     auto scope = timers_.scope("neighbor");  // the displacement check is part of the list's cost
     if (shaped()) {
-      // Contact spheres' displacement (translation and rotation).
-      const double* x0 = e_x_build_.data();
-      for (std::size_t e = 0; e < e_owned_; ++e) {
-        const KernelGeometry& g = k_geometry_[e];
-        const double dx = g.x - x0[3 * e], dy = g.y - x0[3 * e + 1], dz = g.z - x0[3 * e + 2];
-        max2 = std::max(max2, dx * dx + dy * dy + dz * dz);
+      // A contact sphere at distance c from its body's centre has moved at most
+      // |dx| + 2 c sin(theta/2), theta the body's rotation since the build (cos(theta/2) = |q . q0|).
+      const double* x0 = x_build_.data();
+      const double* q0 = q_build_.data();
+      for (std::size_t i = 0; i < p_.owned; ++i) {
+        const double* x = &p_.x[3 * i];
+        const double* q = &p_.q[4 * i];
+        const double dx = x[0] - x0[3 * i], dy = x[1] - x0[3 * i + 1], dz = x[2] - x0[3 * i + 2];
+        const double c = q[0] * q0[4 * i] + q[1] * q0[4 * i + 1] + q[2] * q0[4 * i + 2] + q[3] * q0[4 * i + 3];
+        const double d =
+            std::sqrt(dx * dx + dy * dy + dz * dz) + 2.0 * arm_[p_.shape[i]] * std::sqrt(std::max(0.0, 1.0 - c * c));
+        max2 = std::max(max2, d * d);
       }
     }
     const double* x = p_.x.data();
@@ -857,6 +877,8 @@ void DemSolver::compute_pair_forces(double dt, bool update_history) {
     nt += (dx * dx + dy * dy + dz * dz < rsum * rsum) ? 1 : 0;
   }
   touching_.resize(nt);
+  if (shaped())
+    for (const auto k : touching_) element_motion(first[k]), element_motion(second[k]);
   // Contacts that opened since the last evaluation lose their history (T3).
   if (update_history) {
     auto it = touching_.begin();
@@ -942,13 +964,14 @@ void DemSolver::compute_wall_forces(double dt) {
     double* h = sh ? &wall_hist_[3 * k] : &p_.wall_history[3 * (i * slots + s)];
     Vec3 nrm;
     const KernelGeometry& gi = g[i];
-    const KernelMotion& mi = m[i];
     const double ri = gi.r;
     const double delta = prims[s].overlap(Vec3{gi.x, gi.y, gi.z}, ri, nrm);
     if (delta <= 0.0) {
       h[0] = h[1] = h[2] = 0.0;
       continue;
     }
+    if (sh) element_motion(i);
+    const KernelMotion& mi = m[i];
     L.dx[nb] = nrm.x, L.dy[nb] = nrm.y, L.dz[nb] = nrm.z;
     L.ra[nb] = ri, L.rb[nb] = delta;
     L.vx[nb] = mi.vx, L.vy[nb] = mi.vy, L.vz[nb] = mi.vz;

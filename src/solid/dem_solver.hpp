@@ -135,6 +135,7 @@ class DemSolver {
   void update_elements(std::size_t first_body, std::size_t end_body);
   void build_wall_list_elements(const HistoryMap& extra);
   void reduce_element_forces();
+  void element_motion(std::size_t e);
   // Triangle-mesh walls (T14): candidates at rebuild, forces each step, motion.
   void build_mesh_candidates();
   void compute_mesh_forces(double dt);
@@ -188,7 +189,8 @@ class DemSolver {
   std::vector<double> e_x_, e_r_;     // position at the last build (3 per element), radius
   std::vector<std::size_t> e_first_;  // per local body: its first element (size bodies + 1)
   std::size_t e_owned_ = 0;
-  std::vector<double> e_x_build_;
+  std::vector<double> q_build_;     // owned bodies' orientations at the last build (shaped mode)
+  std::vector<double> arm_;         // per shape: the farthest contact-sphere centre from the body's
   std::vector<double> inertia3_;    // owned bodies: principal moments (3 each)
   std::vector<PairKey> wall_keys_;  // per wall entry (wall_body_ then holds the element)
   std::vector<double> wall_hist_;   // 3 per wall entry
