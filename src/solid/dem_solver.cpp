@@ -753,13 +753,13 @@ void DemSolver::integrate_second() {
 }
 
 void DemSolver::rotate_shaped(std::size_t i, const double* torque, double h, double dt) {
-  // Half-kick of the world angular momentum L = R I R^T w by the torque, then (dt > 0) the free
-  // rotation over dt in the body frame (T9), then w = R I^-1 R^T L.
+  // Half-kick of the angular momentum by the torque (in the body frame: L_b = I R^T w,
+  // L_b += dt/2 R^T T), then (dt > 0) the free rotation over dt (T9), then w = R I^-1 L_b.
   Quaternion q{p_.q[4 * i], p_.q[4 * i + 1], p_.q[4 * i + 2], p_.q[4 * i + 3]};
   const Vec3 inertia = Vec3::load(&inertia3_[3 * i]);
   const Vec3 wb = q.unrotate(p_.ang(i));
   Vec3 lb{inertia.x * wb.x, inertia.y * wb.y, inertia.z * wb.z};
-  lb = q.unrotate(q.rotate(lb) + Vec3::load(torque) * h);
+  lb += q.unrotate(Vec3::load(torque) * h);
   if (dt > 0) free_rotation_step(q, lb, inertia, dt);
   const Vec3 w = q.rotate({lb.x / inertia.x, lb.y / inertia.y, lb.z / inertia.z});
   for (int k = 0; k < 3; ++k) p_.omega[3 * i + k] = w[k];
