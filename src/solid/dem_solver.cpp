@@ -357,6 +357,7 @@ void DemSolver::rebuild() {
 
 void DemSolver::build_elements() {
   const std::size_t n = p_.size();
+  e_forces_clear_ = false;  // new order: every force slot is cleared at the next evaluation
   e_first_.resize(n + 1);
   e_body_.clear(), e_key_.clear(), e_r_.clear();
   for (std::size_t i = 0; i < n; ++i) {
@@ -452,19 +453,26 @@ void DemSolver::build_wall_list_elements(const HistoryMap& extra) {
 }
 
 void DemSolver::reduce_element_forces() {
-  // F = sum F_e, T = sum (T_e + arm_e x F_e), element by element (key order: deterministic).
+  // F = sum F_e, T = sum (T_e + arm_e x F_e) over the body's spheres that touched something this
+  // step (the others hold zeros), in element order (key order: deterministic). The touched slots
+  // are zeroed again here, so the next step starts from zeros without clearing every slot.
   b_force_.assign(p_.owned, KernelForce{0, 0, 0, 0, 0, 0});
-  // The arm is the element's position relative to the centre, as the contact saw it.
-  for (std::size_t i = 0; i < p_.owned; ++i) {
-    KernelForce& b = b_force_[i];
-    const Vec3 xi = p_.pos(i);
-    for (std::size_t e = e_first_[i]; e < e_first_[i + 1]; ++e) {
-      const KernelForce& f = k_force_[e];
-      const Vec3 arm = Vec3{k_geometry_[e].x, k_geometry_[e].y, k_geometry_[e].z} - xi;
+  const std::size_t n = e_body_.size();
+  char* __restrict mark = e_touched_.data();
+  for (std::size_t e = 0; e < n; ++e) {
+    if (!mark[e]) continue;
+    mark[e] = 0;
+    KernelForce& f = k_force_[e];
+    if (e < e_owned_) {
+      // The arm is the element's position relative to the centre, as the contact saw it.
+      const std::size_t i = static_cast<std::size_t>(e_body_[e]);
+      KernelForce& b = b_force_[i];
+      const Vec3 arm = Vec3{k_geometry_[e].x, k_geometry_[e].y, k_geometry_[e].z} - p_.pos(i);
       const Vec3 t = cross(arm, Vec3{f.fx, f.fy, f.fz});
       b.fx += f.fx, b.fy += f.fy, b.fz += f.fz;
       b.tx += f.tx + t.x, b.ty += f.ty + t.y, b.tz += f.tz + t.z;
     }
+    f = KernelForce{0, 0, 0, 0, 0, 0};
   }
 }
 
@@ -583,7 +591,7 @@ void DemSolver::compute_mesh_forces(double dt) {
     cands.assign(mesh_cands_.begin() + mesh_cand_start_[k], mesh_cands_.begin() + mesh_cand_start_[k + 1]);
     const auto contacts = sphere_mesh_contacts(c, g[e].r, m.nodes, m.triangles, cands);
     if (contacts.empty()) continue;
-    if (sh) element_motion(e);
+    if (sh) element_motion(e), e_touched_[e] = 1;
     const std::int64_t ekey = sh ? e_key_[e] : p_.order[e];
     std::size_t nb = 0;
     std::uint64_t keys[ContactLanes::width];
@@ -850,7 +858,12 @@ void DemSolver::compute_pair_forces(double dt, bool update_history) {
   double* hist = list_.history.data();
   k_geometry_.resize(n);
   k_motion_.resize(n);
-  k_force_.assign(n, KernelForce{0, 0, 0, 0, 0, 0});
+  // Shaped mode keeps the slots zero between steps (reduce_element_forces clears the touched ones);
+  // a rebuild (new sizes and order) clears them all.
+  if (!shaped() || k_force_.size() != n || !e_forces_clear_) {
+    k_force_.assign(n, KernelForce{0, 0, 0, 0, 0, 0});
+    if (shaped()) e_touched_.assign(n, 0), e_forces_clear_ = true;
+  }
   // Owned bodies were packed by integrate_first unless a rebuild moved them; ghosts always here.
   // (Shaped mode: every element was packed by update_elements.)
   for (std::size_t i = shaped() ? n : (owned_mirrors_current_ ? p_.owned : 0); i < n; ++i) {
@@ -878,7 +891,10 @@ void DemSolver::compute_pair_forces(double dt, bool update_history) {
   }
   touching_.resize(nt);
   if (shaped())
-    for (const auto k : touching_) element_motion(first[k]), element_motion(second[k]);
+    for (const auto k : touching_) {
+      element_motion(first[k]), element_motion(second[k]);
+      e_touched_[first[k]] = e_touched_[second[k]] = 1;
+    }
   // Contacts that opened since the last evaluation lose their history (T3).
   if (update_history) {
     auto it = touching_.begin();
@@ -970,7 +986,7 @@ void DemSolver::compute_wall_forces(double dt) {
       h[0] = h[1] = h[2] = 0.0;
       continue;
     }
-    if (sh) element_motion(i);
+    if (sh) element_motion(i), e_touched_[i] = 1;
     const KernelMotion& mi = m[i];
     L.dx[nb] = nrm.x, L.dy[nb] = nrm.y, L.dz[nb] = nrm.z;
     L.ra[nb] = ri, L.rb[nb] = delta;

@@ -189,6 +189,8 @@ class DemSolver {
   std::vector<double> e_x_, e_r_;     // position at the last build (3 per element), radius
   std::vector<std::size_t> e_first_;  // per local body: its first element (size bodies + 1)
   std::size_t e_owned_ = 0;
+  std::vector<char> e_touched_;     // element received a force this step (shaped mode)
+  bool e_forces_clear_ = false;     // k_force_ holds zeros in every slot (shaped mode)
   std::vector<double> q_build_;     // owned bodies' orientations at the last build (shaped mode)
   std::vector<double> arm_;         // per shape: the farthest contact-sphere centre from the body's
   std::vector<double> inertia3_;    // owned bodies: principal moments (3 each)
