@@ -357,7 +357,6 @@ void DemSolver::rebuild() {
 
 void DemSolver::build_elements() {
   const std::size_t n = p_.size();
-  e_forces_clear_ = false;  // new order: every force slot is cleared at the next evaluation
   e_first_.resize(n + 1);
   e_body_.clear(), e_key_.clear(), e_r_.clear();
   for (std::size_t i = 0; i < n; ++i) {
@@ -452,28 +451,11 @@ void DemSolver::build_wall_list_elements(const HistoryMap& extra) {
   }
 }
 
-void DemSolver::reduce_element_forces() {
-  // F = sum F_e, T = sum (T_e + arm_e x F_e) over the body's spheres that touched something this
-  // step (the others hold zeros), in element order (key order: deterministic). The touched slots
-  // are zeroed again here, so the next step starts from zeros without clearing every slot.
-  b_force_.assign(p_.owned, KernelForce{0, 0, 0, 0, 0, 0});
-  const std::size_t n = e_body_.size();
-  char* __restrict mark = e_touched_.data();
-  for (std::size_t e = 0; e < n; ++e) {
-    if (!mark[e]) continue;
-    mark[e] = 0;
-    KernelForce& f = k_force_[e];
-    if (e < e_owned_) {
-      // The arm is the element's position relative to the centre, as the contact saw it.
-      const std::size_t i = static_cast<std::size_t>(e_body_[e]);
-      KernelForce& b = b_force_[i];
-      const Vec3 arm = Vec3{k_geometry_[e].x, k_geometry_[e].y, k_geometry_[e].z} - p_.pos(i);
-      const Vec3 t = cross(arm, Vec3{f.fx, f.fy, f.fz});
-      b.fx += f.fx, b.fy += f.fy, b.fz += f.fz;
-      b.tx += f.tx + t.x, b.ty += f.ty + t.y, b.tz += f.tz + t.z;
-    }
-    f = KernelForce{0, 0, 0, 0, 0, 0};
-  }
+void DemSolver::add_lever(KernelForce& f, const KernelGeometry& g, std::size_t body, double fx, double fy,
+                          double fz) const {
+  // Torque of an element force about its body's centre: (x_e - x) x F, the arm as the contact saw it.
+  const double ax = g.x - p_.x[3 * body], ay = g.y - p_.x[3 * body + 1], az = g.z - p_.x[3 * body + 2];
+  f.tx += ay * fz - az * fy, f.ty += az * fx - ax * fz, f.tz += ax * fy - ay * fx;
 }
 
 double DemSolver::mesh_displacement() const {
@@ -591,7 +573,7 @@ void DemSolver::compute_mesh_forces(double dt) {
     cands.assign(mesh_cands_.begin() + mesh_cand_start_[k], mesh_cands_.begin() + mesh_cand_start_[k + 1]);
     const auto contacts = sphere_mesh_contacts(c, g[e].r, m.nodes, m.triangles, cands);
     if (contacts.empty()) continue;
-    if (sh) element_motion(e), e_touched_[e] = 1;
+    if (sh) element_motion(e);
     const std::int64_t ekey = sh ? e_key_[e] : p_.order[e];
     std::size_t nb = 0;
     std::uint64_t keys[ContactLanes::width];
@@ -615,10 +597,12 @@ void DemSolver::compute_mesh_forces(double dt) {
     evaluate_wall_contacts(model_.law(), L, nb, dt);
     for (std::size_t j = 0; j < nb; ++j) {
       mesh_hist_next_[keys[j]] = {L.hx[j], L.hy[j], L.hz[j]};
-      KernelForce& fo = out[e];
+      const std::size_t body = sh ? static_cast<std::size_t>(e_body_[e]) : e;
+      KernelForce& fo = out[body];
       const Vec3 f{L.fx[j], L.fy[j], L.fz[j]};
       fo.fx += f.x, fo.fy += f.y, fo.fz += f.z;
       fo.tx -= L.nx[j] * L.ra[j], fo.ty -= L.ny[j] * L.ra[j], fo.tz -= L.nz[j] * L.ra[j];
+      if (sh) add_lever(fo, g[e], body, f.x, f.y, f.z);
       const Vec3 moment = cross(points[j] - m.origin, f);
       loads.insert(loads.end(), {static_cast<double>(keys[j] >> 32), static_cast<double>(keys[j] & 0xffffffffULL),
                                  static_cast<double>(mesh_of_[k]), -f.x, -f.y, -f.z, -moment.x, -moment.y, -moment.z});
@@ -742,7 +726,7 @@ void DemSolver::integrate_second() {
   double* __restrict w = p_.omega.data();
   double* __restrict f = p_.f.data();
   double* __restrict t = p_.torque.data();
-  const KernelForce* __restrict in = shaped() ? b_force_.data() : k_force_.data();
+  const KernelForce* __restrict in = k_force_.data();
   const double* __restrict inv_m = inv_mass_.data();
   const double* __restrict inv_i = inv_inertia_.data();
   const std::size_t n = p_.owned;
@@ -776,7 +760,7 @@ void DemSolver::rotate_shaped(std::size_t i, const double* torque, double h, dou
 
 void DemSolver::store_forces() {
   for (std::size_t i = 0; i < p_.owned; ++i) {
-    const KernelForce& fo = shaped() ? b_force_[i] : k_force_[i];
+    const KernelForce& fo = k_force_[i];
     p_.f[3 * i] = fo.fx, p_.f[3 * i + 1] = fo.fy, p_.f[3 * i + 2] = fo.fz;
     p_.torque[3 * i] = fo.tx, p_.torque[3 * i + 1] = fo.ty, p_.torque[3 * i + 2] = fo.tz;
   }
@@ -844,10 +828,6 @@ void DemSolver::compute_forces(bool update_history) {
     compute_wall_forces(dt);
     if (!walls_.meshes().empty()) compute_mesh_forces(dt);
   }
-  if (shaped()) {
-    auto t = timers_.scope("contact_forces");  // element forces into body forces and torques
-    reduce_element_forces();
-  }
 }
 
 void DemSolver::compute_pair_forces(double dt, bool update_history) {
@@ -858,12 +838,10 @@ void DemSolver::compute_pair_forces(double dt, bool update_history) {
   double* hist = list_.history.data();
   k_geometry_.resize(n);
   k_motion_.resize(n);
-  // Shaped mode keeps the slots zero between steps (reduce_element_forces clears the touched ones);
-  // a rebuild (new sizes and order) clears them all.
-  if (!shaped() || k_force_.size() != n || !e_forces_clear_) {
-    k_force_.assign(n, KernelForce{0, 0, 0, 0, 0, 0});
-    if (shaped()) e_touched_.assign(n, 0), e_forces_clear_ = true;
-  }
+  // Forces go straight to bodies (shaped mode: element forces with their lever arms, in pair order,
+  // which is canonical as for spheres), so the buffer is one slot per body.
+  const bool sh = shaped();
+  k_force_.assign(p_.size(), KernelForce{0, 0, 0, 0, 0, 0});
   // Owned bodies were packed by integrate_first unless a rebuild moved them; ghosts always here.
   // (Shaped mode: every element was packed by update_elements.)
   for (std::size_t i = shaped() ? n : (owned_mirrors_current_ ? p_.owned : 0); i < n; ++i) {
@@ -891,10 +869,7 @@ void DemSolver::compute_pair_forces(double dt, bool update_history) {
   }
   touching_.resize(nt);
   if (shaped())
-    for (const auto k : touching_) {
-      element_motion(first[k]), element_motion(second[k]);
-      e_touched_[first[k]] = e_touched_[second[k]] = 1;
-    }
+    for (const auto k : touching_) element_motion(first[k]), element_motion(second[k]);
   // Contacts that opened since the last evaluation lose their history (T3).
   if (update_history) {
     auto it = touching_.begin();
@@ -936,11 +911,17 @@ void DemSolver::compute_pair_forces(double dt, bool update_history) {
     for (std::size_t j = 0; j < nb; ++j) {
       const std::size_t k = static_cast<std::size_t>(touching_[s + j]);
       hist[3 * k] = L.hx[j], hist[3 * k + 1] = L.hy[j], hist[3 * k + 2] = L.hz[j];
-      KernelForce &fa = out[first[k]], &fb = out[second[k]];
+      const std::size_t a = sh ? static_cast<std::size_t>(e_body_[first[k]]) : first[k];
+      const std::size_t b = sh ? static_cast<std::size_t>(e_body_[second[k]]) : second[k];
+      KernelForce &fa = out[a], &fb = out[b];
       fa.fx += L.fx[j], fa.fy += L.fy[j], fa.fz += L.fz[j];
       fb.fx -= L.fx[j], fb.fy -= L.fy[j], fb.fz -= L.fz[j];
       fa.tx -= L.nx[j] * L.ra[j], fa.ty -= L.ny[j] * L.ra[j], fa.tz -= L.nz[j] * L.ra[j];
       fb.tx -= L.nx[j] * L.rb[j], fb.ty -= L.ny[j] * L.rb[j], fb.tz -= L.nz[j] * L.rb[j];
+      if (sh) {
+        add_lever(fa, g[first[k]], a, L.fx[j], L.fy[j], L.fz[j]);
+        add_lever(fb, g[second[k]], b, -L.fx[j], -L.fy[j], -L.fz[j]);
+      }
     }
   }
   if (update_history) touching_before_.swap(touching_);
@@ -967,9 +948,11 @@ void DemSolver::compute_wall_forces(double dt) {
       const std::size_t i = wall_body_[k];
       double* h = sh ? &wall_hist_[3 * k] : &p_.wall_history[3 * (i * slots + wall_slot_[k])];
       h[0] = L.hx[j], h[1] = L.hy[j], h[2] = L.hz[j];
-      KernelForce& fo = out[i];
+      const std::size_t body = sh ? static_cast<std::size_t>(e_body_[i]) : i;
+      KernelForce& fo = out[body];
       fo.fx += L.fx[j], fo.fy += L.fy[j], fo.fz += L.fz[j];
       fo.tx -= L.nx[j] * L.ra[j], fo.ty -= L.ny[j] * L.ra[j], fo.tz -= L.nz[j] * L.ra[j];
+      if (sh) add_lever(fo, g[i], body, L.fx[j], L.fy[j], L.fz[j]);
       wall_force_[wall_slot_[k]] -= Vec3{L.fx[j], L.fy[j], L.fz[j]};
     }
     nb = 0;
@@ -986,7 +969,7 @@ void DemSolver::compute_wall_forces(double dt) {
       h[0] = h[1] = h[2] = 0.0;
       continue;
     }
-    if (sh) element_motion(i), e_touched_[i] = 1;
+    if (sh) element_motion(i);
     const KernelMotion& mi = m[i];
     L.dx[nb] = nrm.x, L.dy[nb] = nrm.y, L.dz[nb] = nrm.z;
     L.ra[nb] = ri, L.rb[nb] = delta;

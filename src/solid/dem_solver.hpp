@@ -134,7 +134,6 @@ class DemSolver {
   void build_elements();
   void update_elements(std::size_t first_body, std::size_t end_body);
   void build_wall_list_elements(const HistoryMap& extra);
-  void reduce_element_forces();
   void element_motion(std::size_t e);
   // Triangle-mesh walls (T14): candidates at rebuild, forces each step, motion.
   void build_mesh_candidates();
@@ -170,7 +169,9 @@ class DemSolver {
   };
   std::vector<KernelGeometry> k_geometry_;
   std::vector<KernelMotion> k_motion_;
-  std::vector<KernelForce> k_force_;
+  std::vector<KernelForce> k_force_;  // per local body
+  // Shaped mode: adds the torque (x_e - x_body) x F of an element force to the body's slot.
+  void add_lever(KernelForce& f, const KernelGeometry& g, std::size_t body, double fx, double fy, double fz) const;
   bool owned_mirrors_current_ = false;  // k_geometry_/k_motion_ of owned bodies packed by integrate_first
   // Law coefficients: a table of the distinct sets (one per material pair for equal bodies) and,
   // per listed pair, an index into it: 4 bytes per pair to stream instead of 40.
@@ -189,14 +190,12 @@ class DemSolver {
   std::vector<double> e_x_, e_r_;     // position at the last build (3 per element), radius
   std::vector<std::size_t> e_first_;  // per local body: its first element (size bodies + 1)
   std::size_t e_owned_ = 0;
-  std::vector<char> e_touched_;     // element received a force this step (shaped mode)
   bool e_forces_clear_ = false;     // k_force_ holds zeros in every slot (shaped mode)
   std::vector<double> q_build_;     // owned bodies' orientations at the last build (shaped mode)
   std::vector<double> arm_;         // per shape: the farthest contact-sphere centre from the body's
   std::vector<double> inertia3_;    // owned bodies: principal moments (3 each)
   std::vector<PairKey> wall_keys_;  // per wall entry (wall_body_ then holds the element)
   std::vector<double> wall_hist_;   // 3 per wall entry
-  std::vector<KernelForce> b_force_;
   // Mesh walls: (entity, mesh) pairs within reach at the last rebuild, their candidate triangles,
   // coefficients; tangential histories by (element key, mesh, contact ordinal).
   std::vector<std::int32_t> mesh_entity_, mesh_of_, mesh_cand_start_, mesh_cands_, mesh_coefficient_;
