@@ -15,8 +15,8 @@
 // Shaped bodies (shape templates, T13): when the case declares templates, contacts are between
 // contact elements (a sphere body is one element; a shaped body has one per contact sphere, placed
 // at x + R(q) c_s each step, moving with v + w x R(q) c_s). The list, the kernel and the histories
-// work on elements; element forces are then summed into each body's force and torque, element by
-// element in key order. Shaped bodies rotate by the DLM splitting (T9) between the torque
+// work on elements; each contact's force goes to its two bodies with its lever-arm torque, in the
+// canonical pair order. Shaped bodies rotate by the DLM splitting (T9) between the torque
 // half-kicks; spheres keep the update above.
 #pragma once
 #include <mpi.h>
