@@ -212,6 +212,7 @@ nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolv
                                         std::max(loop_seconds, 1e-9) / decomp_->size();
   s["quantities"] = q;
   // Mesh walls: the load the bodies put on each at the last step, and a pivot's angle and speed.
+  dem_->sum_mesh_loads();
   if (!dem_->walls().meshes().empty()) {
     nlohmann::json meshes = nlohmann::json::array();
     for (const auto& m : dem_->walls().meshes()) {

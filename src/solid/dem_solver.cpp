@@ -565,7 +565,8 @@ void DemSolver::compute_mesh_forces(double dt) {
   mesh_hist_next_.clear();
   // The load on each mesh is summed over all contacts in key order, on every rank: the same bits
   // whatever the decomposition (pivot dynamics stay rank-count independent).
-  std::vector<double> loads;  // per contact: key (2 x 32 bits), mesh, force, moment
+  std::vector<double>& loads = mesh_loads_;  // per contact: key (2 x 32 bits), mesh, force, moment
+  loads.clear();
   for (std::size_t k = 0; k < mesh_entity_.size(); ++k) {
     const std::size_t e = mesh_entity_[k];
     MeshWall& m = meshes[mesh_of_[k]];
@@ -609,7 +610,21 @@ void DemSolver::compute_mesh_forces(double dt) {
     }
   }
   if (dt > 0) mesh_hist_.swap(mesh_hist_next_);
-  // Every rank needs the load on each mesh (pivot dynamics, output).
+  // A pivot needs the whole load every step; other meshes only when it is reported.
+  mesh_loads_pending_ = true;
+  for (const auto& m : meshes)
+    if (m.motion == MeshWall::Motion::pivot) {
+      sum_mesh_loads();
+      break;
+    }
+}
+
+void DemSolver::sum_mesh_loads() {
+  // Every rank gets the load on each mesh, summed over all contacts in key order.
+  if (!mesh_loads_pending_) return;
+  mesh_loads_pending_ = false;
+  auto& meshes = walls_.meshes();
+  const std::vector<double>& loads = mesh_loads_;
   constexpr int stride = 9;
   int size = 1, mine = static_cast<int>(loads.size());
   MPI_Comm comm = decomp_.comm();

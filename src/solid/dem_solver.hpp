@@ -112,6 +112,9 @@ class DemSolver {
   HistoryMap histories() const;
   std::size_t list_builds() const { return list_.builds; }
   std::size_t pair_count() const { return list_.size(); }
+  // Collective: completes the load on each mesh wall (MeshWall::force, moment) for reporting;
+  // pivot meshes have it every step already.
+  void sum_mesh_loads();
   std::size_t halo_bytes_sent() const { return halo_.bytes_sent(); }  // this rank, whole run
 
  private:
@@ -201,6 +204,8 @@ class DemSolver {
   std::vector<std::int32_t> mesh_entity_, mesh_of_, mesh_cand_start_, mesh_cands_, mesh_coefficient_;
   std::unordered_map<std::uint64_t, std::array<double, 3>> mesh_hist_, mesh_hist_next_;
   std::vector<std::vector<Vec3>> mesh_nodes_build_;
+  std::vector<double> mesh_loads_;  // this rank's mesh contacts at the last evaluation
+  bool mesh_loads_pending_ = false;
   double dt_ = 0, time_ = 0, skin_ = 0, r_max_ = 0, t_contact_ = 0;
   long steps_ = 0;
 };
