@@ -112,6 +112,56 @@ std::vector<T> H5File::read_all(const std::string& name, int& cols) const {
   return out;
 }
 
+void H5File::write_block(const std::string& name, const double* data, const std::size_t global[3],
+                         const std::size_t offset[3], const std::size_t count[3], int comps) {
+  const int nd = comps == 1 ? 3 : 4;
+  hsize_t g[4] = {global[0], global[1], global[2], hsize_t(comps)};
+  hsize_t o[4] = {offset[0], offset[1], offset[2], 0};
+  hsize_t c[4] = {count[0], count[1], count[2], hsize_t(comps)};
+  const hid_t fspace = H5Screate_simple(nd, g, nullptr);
+  const hid_t dset = H5Dcreate2(file_, name.c_str(), H5T_NATIVE_DOUBLE, fspace, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  if (dset < 0) throw RunError("HDF5: cannot create dataset " + name + " in " + path_);
+  const hid_t mspace = H5Screate_simple(nd, c, nullptr);
+  H5Sselect_hyperslab(fspace, H5S_SELECT_SET, o, nullptr, c, nullptr);
+  const hid_t dxpl = H5Pcreate(H5P_DATASET_XFER);
+  H5Pset_dxpl_mpio(dxpl, H5FD_MPIO_COLLECTIVE);
+  check(H5Dwrite(dset, H5T_NATIVE_DOUBLE, mspace, fspace, dxpl, data), "write " + name);
+  H5Pclose(dxpl);
+  H5Sclose(mspace);
+  H5Sclose(fspace);
+  H5Dclose(dset);
+}
+
+std::vector<double> H5File::read_block(const std::string& name, const std::size_t global[3],
+                                       const std::size_t offset[3], const std::size_t count[3], int comps) const {
+  const hid_t dset = H5Dopen2(file_, name.c_str(), H5P_DEFAULT);
+  if (dset < 0) throw InputError("restart", path_, "a checkpoint with dataset " + name);
+  const hid_t fspace = H5Dget_space(dset);
+  const int nd = comps == 1 ? 3 : 4;
+  hsize_t dims[4] = {0, 0, 0, 1};
+  if (H5Sget_simple_extent_ndims(fspace) != nd)
+    throw InputError("restart", path_, "dataset " + name + " of rank " + std::to_string(nd));
+  H5Sget_simple_extent_dims(fspace, dims, nullptr);
+  for (int d = 0; d < 3; ++d)
+    if (dims[d] != global[d])
+      throw InputError("restart", path_,
+                       "a checkpoint on the same grid (dataset " + name + " has " + std::to_string(dims[d]) +
+                           " cells along axis " + std::to_string(d) + ", the case " + std::to_string(global[d]) + ")");
+  hsize_t o[4] = {offset[0], offset[1], offset[2], 0};
+  hsize_t c[4] = {count[0], count[1], count[2], hsize_t(comps)};
+  const hid_t mspace = H5Screate_simple(nd, c, nullptr);
+  H5Sselect_hyperslab(fspace, H5S_SELECT_SET, o, nullptr, c, nullptr);
+  std::vector<double> out(count[0] * count[1] * count[2] * comps);
+  const hid_t dxpl = H5Pcreate(H5P_DATASET_XFER);
+  H5Pset_dxpl_mpio(dxpl, H5FD_MPIO_COLLECTIVE);
+  check(H5Dread(dset, H5T_NATIVE_DOUBLE, mspace, fspace, dxpl, out.data()), "read " + name);
+  H5Pclose(dxpl);
+  H5Sclose(mspace);
+  H5Sclose(fspace);
+  H5Dclose(dset);
+  return out;
+}
+
 bool H5File::has(const std::string& name) const { return H5Lexists(file_, name.c_str(), H5P_DEFAULT) > 0; }
 
 void H5File::set_attribute(const std::string& name, double value) {

@@ -29,6 +29,14 @@ class H5File {
   template <class T>
   std::vector<T> read_all(const std::string& name, int& cols) const;
   bool has(const std::string& name) const;
+  // Collective. A block of a global array of shape (global[0], global[1], global[2], comps) in C
+  // order (slowest first): this rank writes count[] rows from offset[] of its packed buffer
+  // (count[0] * count[1] * count[2] * comps values). Fluid fields use (z, y, x, comps).
+  void write_block(const std::string& name, const double* data, const std::size_t global[3],
+                   const std::size_t offset[3], const std::size_t count[3], int comps);
+  // Reads this rank's block of such an array (checks the global shape).
+  std::vector<double> read_block(const std::string& name, const std::size_t global[3], const std::size_t offset[3],
+                                 const std::size_t count[3], int comps) const;
 
   void set_attribute(const std::string& name, double value);
   void set_attribute(const std::string& name, long value);

@@ -48,6 +48,10 @@ constexpr std::array kUnits{
     UnitEntry{"N.m", Dim::moment, 1.0},
     UnitEntry{"kg*m^2", Dim::moment_of_inertia, 1.0},
     UnitEntry{"kg.m^2", Dim::moment_of_inertia, 1.0},
+    UnitEntry{"Pa*s", Dim::viscosity, 1.0},
+    UnitEntry{"Pa.s", Dim::viscosity, 1.0},
+    UnitEntry{"mPa*s", Dim::viscosity, 1e-3},
+    UnitEntry{"mPa.s", Dim::viscosity, 1e-3},
 };
 
 }  // namespace
@@ -84,6 +88,8 @@ const char* si_unit(Dim d) {
       return "N*m";
     case Dim::moment_of_inertia:
       return "kg*m^2";
+    case Dim::viscosity:
+      return "Pa*s";
   }
   return "?";
 }

@@ -24,6 +24,7 @@ enum class Dim {
   angular_velocity,   // rad/s
   moment,             // N m
   moment_of_inertia,  // kg m^2
+  viscosity,          // Pa s (dynamic)
 };
 
 const char* si_unit(Dim d);

@@ -1,0 +1,489 @@
+// SPDX-License-Identifier: MIT
+#include "fluid/flow_solver.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/errors.hpp"
+#include "fluid/plic.hpp"
+
+namespace tessera {
+namespace {
+
+// Cells with f below kEmpty or above 1 - kEmpty carry no interface (round-off residue of the
+// split advection; their volume stays counted, none is clipped).
+constexpr double kEmpty = 1e-12;
+
+// van Leer limited slope from the two one-sided differences.
+inline double van_leer(double a, double b) { return a * b > 0 ? 2 * a * b / (a + b) : 0.0; }
+
+// Face viscosity: the harmonic mean of the two cells'. Exact for shear along a layered interface
+// (stresses in series) and bounded by twice the smaller viscosity, so that a gas cell beside the
+// interface keeps close to the gas's explicit viscous limit; the arithmetic mean would give it
+// half the liquid's viscosity over the gas's density (30 times the gas's nu for air and water).
+inline double face_viscosity(double a, double b) { return a + b > 0 ? 2 * a * b / (a + b) : 0.0; }
+
+// One phase throughout (no interface in the cells): there the limited slope is safe.
+inline bool one_phase(double a, double b, double c) {
+  return (a <= kEmpty && b <= kEmpty && c <= kEmpty) || (a >= 1 - kEmpty && b >= 1 - kEmpty && c >= 1 - kEmpty);
+}
+
+// Loops over a box of global indices [lo, hi) in k, j, i order.
+template <class F>
+void for_box(const std::array<int, 3>& lo, const std::array<int, 3>& hi, F&& fn) {
+  for (int k = lo[2]; k < hi[2]; ++k)
+    for (int j = lo[1]; j < hi[1]; ++j)
+      for (int i = lo[0]; i < hi[0]; ++i) fn(i, j, k);
+}
+
+}  // namespace
+
+FlowSolver::FlowSolver(const Decomposition& decomp, const FlowSettings& settings) : settings_(settings) {
+  grid_ = std::make_unique<FluidGrid>(decomp, settings.cells, settings.boundaries);
+  poisson_ = std::make_unique<PressurePoisson>(*grid_, settings.poisson);
+  const FluidGrid& g = *grid_;
+  f_ = g.make_field();
+  p_ = g.make_field();
+  rho_ = g.make_field();
+  mu_ = g.make_field();
+  indicator_ = g.make_field();
+  rhs_ = g.make_field();
+  flux_f_ = g.make_field();
+  flux_m_ = g.make_field();
+  for (int d = 0; d < 3; ++d) {
+    u_[d] = g.make_field();
+    uf_[d] = g.make_field();
+    work_[d] = g.make_field();
+    flux_q_[d] = g.make_field();
+  }
+  for (auto& a : plic_) a = g.make_field();
+}
+
+FlowSolver::~FlowSolver() = default;
+
+void FlowSolver::initialize(const std::function<CellState(int, int, int)>& cell) {
+  const FluidGrid& g = *grid_;
+  for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)}, [&](int i, int j, int k) {
+    const CellState s = cell(i, j, k);
+    const std::size_t c = g.at(i, j, k);
+    f_[c] = s.liquid_fraction;
+    for (int d = 0; d < 3; ++d) u_[d][c] = s.velocity[d];
+  });
+  refresh();
+  project(1.0, false);  // divergence-free face velocities for the first step
+  std::fill(p_.begin(), p_.end(), 0.0);
+}
+
+void FlowSolver::refresh() {
+  grid_->exchange({&f_, &u_[0], &u_[1], &u_[2], &p_, &uf_[0], &uf_[1], &uf_[2]});
+  fill_fraction_ghosts(f_);
+  fill_velocity_ghosts(u_);
+  fill_pressure_ghosts();
+  update_properties();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Boundary ghosts. Layer g (1, 2) beyond a non-periodic side mirrors interior layer g - 1.
+namespace {
+
+template <class F>
+void for_boundary_ghosts(const FluidGrid& g, int d, int side, F&& fn) {
+  std::array<int, 3> lo{g.gbegin(0), g.gbegin(1), g.gbegin(2)}, hi{g.gend(0), g.gend(1), g.gend(2)};
+  const int n = g.cells()[d];
+  for (int layer = 1; layer <= FluidGrid::kGhost; ++layer) {
+    const int ghost = side == 0 ? -layer : n - 1 + layer;
+    const int mirror = side == 0 ? layer - 1 : n - layer;
+    std::array<int, 3> a = lo, b = hi;
+    a[d] = ghost;
+    b[d] = ghost + 1;
+    for_box(a, b, [&](int i, int j, int k) {
+      std::array<int, 3> m{i, j, k};
+      m[d] = mirror;
+      fn(g.at(i, j, k), g.at(m[0], m[1], m[2]));
+    });
+  }
+}
+
+}  // namespace
+
+void FlowSolver::fill_fraction_ghosts(std::vector<double>& f) const {
+  const FluidGrid& g = *grid_;
+  for (int d = 0; d < 3; ++d)
+    for (int side = 0; side < 2; ++side)
+      if (g.at_domain_edge(d, side))
+        for_boundary_ghosts(g, d, side, [&](std::size_t gh, std::size_t in) { f[gh] = f[in]; });
+}
+
+void FlowSolver::fill_velocity_ghosts(std::array<std::vector<double>, 3>& u) const {
+  const FluidGrid& g = *grid_;
+  for (int d = 0; d < 3; ++d)
+    for (int side = 0; side < 2; ++side) {
+      if (!g.at_domain_edge(d, side)) continue;
+      const BoundaryKind kind = g.boundary(d, side);
+      for (int q = 0; q < 3; ++q) {
+        // no-slip: the wall is at rest, every component odd; free-slip: the normal one odd;
+        // outflow: zero gradient.
+        const bool odd = kind == BoundaryKind::no_slip || (kind == BoundaryKind::free_slip && q == d);
+        auto& uq = u[q];
+        if (odd)
+          for_boundary_ghosts(g, d, side, [&](std::size_t gh, std::size_t in) { uq[gh] = -uq[in]; });
+        else
+          for_boundary_ghosts(g, d, side, [&](std::size_t gh, std::size_t in) { uq[gh] = uq[in]; });
+      }
+    }
+}
+
+void FlowSolver::fill_pressure_ghosts() {
+  const FluidGrid& g = *grid_;
+  for (int d = 0; d < 3; ++d)
+    for (int side = 0; side < 2; ++side) {
+      if (!g.at_domain_edge(d, side)) continue;
+      if (g.boundary(d, side) == BoundaryKind::outflow)
+        for_boundary_ghosts(g, d, side, [&](std::size_t gh, std::size_t in) { p_[gh] = -p_[in]; });
+      else
+        for_boundary_ghosts(g, d, side, [&](std::size_t gh, std::size_t in) { p_[gh] = p_[in]; });
+    }
+}
+
+void FlowSolver::update_properties() {
+  const double rg = settings_.gas.density, dr = settings_.liquid.density - rg;
+  const double mg = settings_.gas.viscosity, dm = settings_.liquid.viscosity - mg;
+  for (std::size_t c = 0; c < f_.size(); ++c) {
+    rho_[c] = rg + dr * f_[c];
+    mu_[c] = mg + dm * f_[c];
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Time step control.
+double FlowSolver::stable_dt(std::string& limit) const {
+  const FluidGrid& g = *grid_;
+  double rate = 0;
+  for (int d = 0; d < 3; ++d) {
+    double umax = 0;
+    std::array<int, 3> hi{g.end(0), g.end(1), g.end(2)};
+    hi[d] += 1;  // the high face of the last owned cell
+    for_box({g.begin(0), g.begin(1), g.begin(2)}, hi,
+            [&](int i, int j, int k) { umax = std::max(umax, std::abs(uf_[d][g.at(i, j, k)])); });
+    for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)},
+            [&](int i, int j, int k) { umax = std::max(umax, std::abs(u_[d][g.at(i, j, k)])); });
+    rate = std::max(rate, umax / g.h(d));
+  }
+  rate = g.reduce_max(rate);
+  const double inf = std::numeric_limits<double>::infinity();
+  double dt = settings_.dt_max;
+  limit = "max";
+  auto take = [&](double candidate, const char* name) {
+    if (candidate < dt) dt = candidate, limit = name;
+  };
+  if (rate > 0) take(settings_.cfl / rate, "cfl");
+  // The viscous limit takes the largest face viscosity over the cell's own density (a gas cell next
+  // to the interface sees a face viscosity above the gas's own).
+  double nu = 0;
+  for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)}, [&](int i, int j, int k) {
+    const std::size_t c = g.at(i, j, k);
+    double m = mu_[c];
+    for (int d = 0; d < 3; ++d)
+      m = std::max({m, face_viscosity(mu_[c], mu_[c - g.stride(d)]), face_viscosity(mu_[c], mu_[c + g.stride(d)])});
+    nu = std::max(nu, m / rho_[c]);
+  });
+  nu = g.reduce_max(nu);
+  double inv_h2 = 0, hmin = inf;
+  for (int d = 0; d < 3; ++d)
+    if (g.cells()[d] > 1 || g.periodic(d)) inv_h2 += 1 / (g.h(d) * g.h(d)), hmin = std::min(hmin, g.h(d));
+  if (nu > 0) take(settings_.viscous_number / (2 * nu * inv_h2), "viscous");
+  const double gmag = std::sqrt(dot(settings_.gravity, settings_.gravity));
+  if (gmag > 0) take(settings_.gravity_number * std::sqrt(hmin / gmag), "gravity");
+  if (last_dt_ > 0) take(settings_.dt_growth * last_dt_, "growth");
+  return dt;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Step.
+FlowStepStats FlowSolver::advance(double dt) {
+  if (!(dt >= settings_.dt_min))
+    throw CollectiveRunError("flow time step " + std::to_string(dt) + " s is below fluid.dt.min (" +
+                             std::to_string(settings_.dt_min) + " s)");
+  FlowStepStats st;
+  st.dt = dt;
+  advect(dt);
+  if (settings_.liquid.viscosity > 0 || settings_.gas.viscosity > 0) {
+    auto t = timers_.scope("viscous");
+    viscous(dt);
+  }
+  st.poisson = project(dt, true);
+  time_ += dt;
+  ++steps_;
+  last_dt_ = dt;
+  return st;
+}
+
+void FlowSolver::advect(double dt) {
+  const FluidGrid& g = *grid_;
+  auto t = timers_.scope("advection");
+  // Weymouth & Yue's cell-centred indicator, from the start of the step (F4).
+  for (std::size_t c = 0; c < f_.size(); ++c) indicator_[c] = f_[c] > 0.5 ? 1.0 : 0.0;
+  // The sweep order alternates from step to step (x y z, then z y x).
+  const int order[2][3] = {{0, 1, 2}, {2, 1, 0}};
+  for (int d : order[parity_++ % 2]) {
+    if (g.cells()[d] == 1 && !g.periodic(d)) continue;  // a one-cell slab between walls: no flow
+    sweep(d, dt);
+  }
+  update_properties();
+}
+
+void FlowSolver::reconstruct(int d) {
+  const FluidGrid& g = *grid_;
+  std::array<int, 3> lo{g.begin(0), g.begin(1), g.begin(2)}, hi{g.end(0), g.end(1), g.end(2)};
+  lo[d] -= 1;
+  hi[d] += 1;
+  const std::ptrdiff_t sx = g.stride(0), sy = g.stride(1), sz = g.stride(2);
+  for_box(lo, hi, [&](int i, int j, int k) {
+    const std::size_t c = g.at(i, j, k);
+    const double fc = f_[c];
+    if (fc <= kEmpty || fc >= 1 - kEmpty) return;
+    // Youngs' normal: minus the gradient of f averaged over the cell's eight corners, in index
+    // space (the unit-cube map of the cell), weights 1-2-1 across (F5).
+    double n[3] = {0, 0, 0};
+    for (int b = -1; b <= 1; ++b)
+      for (int a = -1; a <= 1; ++a) {
+        const double w = (a == 0 ? 2.0 : 1.0) * (b == 0 ? 2.0 : 1.0);
+        n[0] += w * (f_[c - sx + a * sy + b * sz] - f_[c + sx + a * sy + b * sz]);
+        n[1] += w * (f_[c - sy + a * sx + b * sz] - f_[c + sy + a * sx + b * sz]);
+        n[2] += w * (f_[c - sz + a * sx + b * sy] - f_[c + sz + a * sx + b * sy]);
+      }
+    if (n[0] == 0 && n[1] == 0 && n[2] == 0) n[d] = 1;  // isolated fragment: any plane will do
+    plic_[0][c] = n[0];
+    plic_[1][c] = n[1];
+    plic_[2][c] = n[2];
+    plic_[3][c] = plic::plane_alpha(n[0], n[1], n[2], fc);
+  });
+}
+
+void FlowSolver::sweep(int d, double dt) {
+  const FluidGrid& g = *grid_;
+  reconstruct(d);
+  const double h = g.h(d);
+  const std::ptrdiff_t st = g.stride(d);
+  const double rg = settings_.gas.density, dr = settings_.liquid.density - rg;
+  const auto& uf = uf_[d];
+  // Face fluxes on the faces of owned cells along d: low faces and the last high face.
+  std::array<int, 3> lo{g.begin(0), g.begin(1), g.begin(2)}, hi{g.end(0), g.end(1), g.end(2)};
+  hi[d] += 1;
+  for_box(lo, hi, [&](int i, int j, int k) {
+    const std::size_t c = g.at(i, j, k);
+    const double v = uf[c];
+    const double s = std::abs(v) * dt / h;  // slab thickness in cell widths
+    const bool forward = v > 0;
+    const std::size_t up = forward ? c - st : c;
+    const double fu = f_[up];
+    double vol = 0;
+    if (s > 0) {
+      if (fu >= 1 - kEmpty)
+        vol = s;
+      else if (fu > kEmpty) {
+        const double n[3] = {plic_[0][up], plic_[1][up], plic_[2][up]};
+        vol = plic::slab_volume(n, plic_[3][up], d, s, forward);
+      }
+    }
+    const double flux_f = forward ? vol : -vol;           // liquid, per cell volume, towards +d
+    const double flux_m = rg * v * dt / h + dr * flux_f;  // mass, per cell volume (F6)
+    flux_f_[c] = flux_f;
+    flux_m_[c] = flux_m;
+    // The advected velocity: van Leer limited upwind value inside one phase; plain upwind where
+    // the stencil holds the interface (there a limited value weighted by the other phase's mass
+    // flux is not a convex combination and amplifies round-off at a density ratio of 1000).
+    const bool smooth =
+        forward ? one_phase(f_[c - 2 * st], f_[c - st], f_[c]) : one_phase(f_[c - st], f_[c], f_[c + st]);
+    for (int q = 0; q < 3; ++q) {
+      const auto& u = u_[q];
+      double face;
+      if (forward)
+        face = u[c - st] + (smooth ? 0.5 * (1 - s) * van_leer(u[c - st] - u[c - 2 * st], u[c] - u[c - st]) : 0.0);
+      else
+        face = u[c] - (smooth ? 0.5 * (1 - s) * van_leer(u[c] - u[c - st], u[c + st] - u[c]) : 0.0);
+      flux_q_[q][c] = flux_m * face;
+    }
+  });
+  for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)}, [&](int i, int j, int k) {
+    const std::size_t c = g.at(i, j, k);
+    const double div = (uf[c + st] - uf[c]) * dt / h;
+    const double cc = indicator_[c];
+    const double f_old = f_[c];
+    const double f_new = f_old - (flux_f_[c + st] - flux_f_[c]) + cc * div;  // (F4)
+    const double rho_old = rg + dr * f_old, rho_new = rg + dr * f_new, rho_cc = rg + dr * cc;
+    for (int q = 0; q < 3; ++q) {
+      const double m = rho_old * u_[q][c] - (flux_q_[q][c + st] - flux_q_[q][c]) + rho_cc * u_[q][c] * div;
+      u_[q][c] = m / rho_new;  // (F7)
+    }
+    f_[c] = f_new;
+  });
+  g.exchange({&f_, &u_[0], &u_[1], &u_[2]});
+  fill_fraction_ghosts(f_);
+  fill_velocity_ghosts(u_);
+}
+
+void FlowSolver::viscous(double dt) {
+  const FluidGrid& g = *grid_;
+  const double h[3] = {g.h(0), g.h(1), g.h(2)};
+  for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)}, [&](int i, int j, int k) {
+    const std::size_t c = g.at(i, j, k);
+    for (int q = 0; q < 3; ++q) {
+      double div_tau = 0;
+      for (int d = 0; d < 3; ++d) {
+        const std::ptrdiff_t sd = g.stride(d);
+        for (int side = 0; side < 2; ++side) {
+          const std::size_t cn = side ? c + sd : c - sd;
+          const double sign = side ? 1.0 : -1.0;
+          const double mu_f = face_viscosity(mu_[c], mu_[cn]);
+          const double duq_dd = sign * (u_[q][cn] - u_[q][c]) / h[d];
+          double dud_dq;
+          if (q == d) {
+            dud_dq = duq_dd;
+          } else {
+            const std::ptrdiff_t sq = g.stride(q);
+            dud_dq = ((u_[d][c + sq] - u_[d][c - sq]) + (u_[d][cn + sq] - u_[d][cn - sq])) / (4 * h[q]);
+          }
+          div_tau += sign * mu_f * (duq_dd + dud_dq) / h[d];
+        }
+      }
+      work_[q][c] = u_[q][c] + dt * div_tau / rho_[c];
+    }
+  });
+  for (int q = 0; q < 3; ++q) std::swap(u_[q], work_[q]);
+  g.exchange({&u_[0], &u_[1], &u_[2]});
+  fill_velocity_ghosts(u_);
+}
+
+PoissonStats FlowSolver::project(double dt, bool with_gravity) {
+  const FluidGrid& g = *grid_;
+  const Vec3 gravity = with_gravity ? settings_.gravity : Vec3{};
+  // Predicted face velocities (F8).
+  for (int d = 0; d < 3; ++d) {
+    std::array<int, 3> hi{g.end(0), g.end(1), g.end(2)};
+    hi[d] += 1;
+    const std::ptrdiff_t st = g.stride(d);
+    const int n = g.cells()[d];
+    auto& uf = uf_[d];
+    const auto& u = u_[d];
+    for_box({g.begin(0), g.begin(1), g.begin(2)}, hi, [&](int i, int j, int k) {
+      const std::size_t c = g.at(i, j, k);
+      const int idx = d == 0 ? i : (d == 1 ? j : k);
+      if (!g.periodic(d) && (idx == 0 || idx == n)) {
+        const bool low = idx == 0;
+        uf[c] = g.boundary(d, low ? 0 : 1) == BoundaryKind::outflow ? u[low ? c : c - st] + dt * gravity[d] : 0.0;
+      } else {
+        uf[c] = 0.5 * (u[c - st] + u[c]) + dt * gravity[d];
+      }
+    });
+  }
+  const double area[3] = {g.h(1) * g.h(2), g.h(0) * g.h(2), g.h(0) * g.h(1)};
+  for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)}, [&](int i, int j, int k) {
+    const std::size_t c = g.at(i, j, k);
+    double outflow = 0;
+    for (int d = 0; d < 3; ++d) outflow += (uf_[d][c + g.stride(d)] - uf_[d][c]) * area[d];
+    rhs_[c] = -outflow / dt;
+  });
+  PoissonStats ps;
+  {
+    auto t = timers_.scope("poisson");
+    poisson_->assemble(rho_);
+    ps = poisson_->solve(rhs_, p_);
+  }
+  auto t = timers_.scope("projection");
+  g.exchange(p_);
+  fill_pressure_ghosts();
+  // Face corrections and face accelerations a_f = g_f - grad_f p / rho_f (F10).
+  for (int d = 0; d < 3; ++d) {
+    std::array<int, 3> hi{g.end(0), g.end(1), g.end(2)};
+    hi[d] += 1;
+    const std::ptrdiff_t st = g.stride(d);
+    const int n = g.cells()[d];
+    const double h = g.h(d);
+    auto& uf = uf_[d];
+    auto& a = work_[d];
+    for_box({g.begin(0), g.begin(1), g.begin(2)}, hi, [&](int i, int j, int k) {
+      const std::size_t c = g.at(i, j, k);
+      const int idx = d == 0 ? i : (d == 1 ? j : k);
+      double grad_over_rho;
+      if (!g.periodic(d) && (idx == 0 || idx == n)) {
+        const bool low = idx == 0;
+        if (g.boundary(d, low ? 0 : 1) != BoundaryKind::outflow) {
+          a[c] = 0;  // a wall: its normal velocity, hence acceleration, is zero
+          return;
+        }
+        // p = 0 on the outflow face, half a cell from the centre.
+        grad_over_rho = low ? p_[c] / (0.5 * h) / rho_[c] : -p_[c - st] / (0.5 * h) / rho_[c - st];
+      } else {
+        grad_over_rho = (p_[c] - p_[c - st]) / h / (0.5 * (rho_[c] + rho_[c - st]));
+      }
+      a[c] = gravity[d] - grad_over_rho;
+      uf[c] -= dt * grad_over_rho;
+    });
+  }
+  for (int d = 0; d < 3; ++d) {
+    const std::ptrdiff_t st = g.stride(d);
+    for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)}, [&](int i, int j, int k) {
+      const std::size_t c = g.at(i, j, k);
+      u_[d][c] += dt * 0.5 * (work_[d][c] + work_[d][c + st]);
+    });
+  }
+  g.exchange({&u_[0], &u_[1], &u_[2]});
+  fill_velocity_ghosts(u_);
+  return ps;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Diagnostics.
+double FlowSolver::liquid_volume() const { return grid_->sum_owned(f_) * grid_->cell_volume(); }
+
+double FlowSolver::kinetic_energy() const {
+  const FluidGrid& g = *grid_;
+  double e = 0;
+  for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)}, [&](int i, int j, int k) {
+    const std::size_t c = g.at(i, j, k);
+    e += 0.5 * rho_[c] * (u_[0][c] * u_[0][c] + u_[1][c] * u_[1][c] + u_[2][c] * u_[2][c]);
+  });
+  return g.reduce_sum(e) * g.cell_volume();
+}
+
+double FlowSolver::max_speed() const {
+  const FluidGrid& g = *grid_;
+  double m = 0;
+  for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)}, [&](int i, int j, int k) {
+    const std::size_t c = g.at(i, j, k);
+    m = std::max(m, u_[0][c] * u_[0][c] + u_[1][c] * u_[1][c] + u_[2][c] * u_[2][c]);
+  });
+  return std::sqrt(g.reduce_max(m));
+}
+
+double FlowSolver::max_face_divergence() const {
+  const FluidGrid& g = *grid_;
+  double m = 0;
+  for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)}, [&](int i, int j, int k) {
+    const std::size_t c = g.at(i, j, k);
+    double div = 0;
+    for (int d = 0; d < 3; ++d) div += (uf_[d][c + g.stride(d)] - uf_[d][c]) / g.h(d);
+    m = std::max(m, std::abs(div));
+  });
+  return g.reduce_max(m);
+}
+
+double FlowSolver::min_fraction() const {
+  const FluidGrid& g = *grid_;
+  double m = std::numeric_limits<double>::infinity();
+  for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)},
+          [&](int i, int j, int k) { m = std::min(m, f_[g.at(i, j, k)]); });
+  return g.reduce_min(m);
+}
+
+double FlowSolver::max_fraction() const {
+  const FluidGrid& g = *grid_;
+  double m = -std::numeric_limits<double>::infinity();
+  for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)},
+          [&](int i, int j, int k) { m = std::max(m, f_[g.at(i, j, k)]); });
+  return g.reduce_max(m);
+}
+
+}  // namespace tessera

@@ -1,0 +1,67 @@
+// SPDX-License-Identifier: MIT
+// The variable-coefficient pressure Poisson equation of the projection (docs/theory.md F9):
+//
+//   sum over faces of A_f / (h_f rho_f) (p_c - p_nb) = -(1/dt) sum over faces of A_f u*_f . n_f
+//
+// on 7 points, rho_f the face density (mean of the two cells). Walls carry no flux (no term);
+// an outflow face holds p = 0 at the face (p_ghost = -p_c, coefficient doubled); periodic faces
+// couple across the domain. Without an outflow face the operator is singular: the constants are
+// declared as its null space and removed from the right-hand side.
+//
+// Solved with PETSc KSP on the pressure DMDA: CG (unpreconditioned residual norm, so that the
+// tolerance means the same for every preconditioner) with algebraic multigrid by default; the
+// previous pressure is the initial guess. Options prefix `poisson_`: anything in the case's
+// fluid.poisson.petsc_options or on the command line (-poisson_pc_type gamg ...) overrides.
+// A solve that does not converge throws, never returns a silent step.
+#pragma once
+#include <petscksp.h>
+
+#include <string>
+#include <vector>
+
+#include "fluid/fluid_grid.hpp"
+
+namespace tessera {
+
+struct PoissonSettings {
+  double rtol = 1e-8;  // relative to |b|
+  double atol = 0;     // absolute residual (units of the equation: m^3/s)
+  int max_iterations = 500;
+  std::string petsc_options;     // inserted before KSPSetFromOptions, e.g. "-poisson_pc_type gamg"
+  int reuse_preconditioner = 1;  // rebuild the preconditioner every N solves (1 = every solve)
+};
+
+struct PoissonStats {
+  int iterations = 0;
+  double residual = 0;  // unpreconditioned 2-norm at the end
+  double rhs_norm = 0;
+  std::string reason;
+};
+
+class PressurePoisson {
+ public:
+  PressurePoisson(const FluidGrid& grid, const PoissonSettings& settings);
+  ~PressurePoisson();
+  PressurePoisson(const PressurePoisson&) = delete;
+  PressurePoisson& operator=(const PressurePoisson&) = delete;
+
+  // rho: ghosted cell densities (ghosts valid). Builds the matrix.
+  void assemble(const std::vector<double>& rho);
+  // rhs: ghosted array, values on owned cells. p: ghosted, owned values are the initial guess and
+  // receive the solution. Throws CollectiveRunError when KSP does not converge.
+  PoissonStats solve(const std::vector<double>& rhs, std::vector<double>& p);
+  bool singular() const { return singular_; }
+  std::string description() const;  // KSP and PC types, for the log
+
+ private:
+  const FluidGrid& grid_;
+  PoissonSettings settings_;
+  Mat A_ = nullptr;
+  Vec x_ = nullptr, b_ = nullptr;
+  KSP ksp_ = nullptr;
+  MatNullSpace nullspace_ = nullptr;
+  bool singular_ = true;
+  long solves_ = 0;
+};
+
+}  // namespace tessera
