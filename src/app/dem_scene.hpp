@@ -13,6 +13,7 @@
 #include <optional>
 #include <string>
 
+#include "app/scene.hpp"
 #include "core/config.hpp"
 #include "core/decomposition.hpp"
 #include "solid/dem_io.hpp"
@@ -20,21 +21,11 @@
 
 namespace tessera {
 
-struct RunOptions {
-  std::string output_dir;          // created once set-up has succeeded
-  std::string resolved_case_yaml;  // written there as case.resolved.yaml
-  std::optional<std::string> restart;
-  bool quiet = false;
-};
-
-class DemScene {
+class DemScene : public Scene {
  public:
   DemScene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir);
-  virtual ~DemScene() = default;
-  virtual const char* name() const = 0;
 
-  // Runs to the end; returns the summary (also written to DIR/summary.json).
-  nlohmann::json run(const RunOptions& options, const nlohmann::json& resolved_case);
+  nlohmann::json run(const RunOptions& options, const nlohmann::json& resolved_case) override;
 
   DemSolver& dem() { return *dem_; }
   int rank() const { return decomp_->rank(); }
@@ -71,7 +62,7 @@ class DemScene {
   std::string case_dir_;
 };
 
-// Builds the scene the case names (key `scene`).
-std::unique_ptr<DemScene> make_scene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir);
+// Builds a dry scene (deposition, bed): for callers that need its DEM (tests, tools).
+std::unique_ptr<DemScene> make_dem_scene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir);
 
 }  // namespace tessera

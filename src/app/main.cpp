@@ -2,6 +2,7 @@
 // tessera: impacts on granular beds.
 //
 //   tessera run CASE.yaml [--set section.key=value ...] [--output DIR] [--restart CHECKPOINT] [--quiet]
+//               [--petsc "-poisson_pc_type gamg ..."]
 //   tessera info
 // Exit codes: 0 done, 2 bad input (nothing written), 3 interrupted by a signal (checkpoint written),
 // 4 blow-up (failure.h5 written), 1 other failure (MPI_Abort).
@@ -20,6 +21,9 @@
 #include <vector>
 
 #include "app/dem_scene.hpp"
+#if defined(TESSERA_HAVE_PETSC)
+#include <petscsys.h>
+#endif
 #include "app/signals.hpp"
 #include "app/yaml_json.hpp"
 #include "core/config.hpp"
@@ -34,10 +38,11 @@ namespace {
 
 const char* kUsage =
     "usage: tessera run CASE.yaml [--set section.key=value ...] [--output DIR] [--restart CHECKPOINT] [--quiet]\n"
+    "                   [--petsc \"PETSc options\"]   (flow scenes: e.g. -poisson_ksp_monitor -poisson_pc_type gamg)\n"
     "       tessera info\n";
 
 struct Args {
-  std::string command, case_file, output;
+  std::string command, case_file, output, petsc_options;
   std::vector<std::string> sets;
   std::optional<std::string> restart;
   bool quiet = false;
@@ -61,6 +66,8 @@ Args parse_args(int argc, char** argv) {
       a.output = value("--output");
     else if (s == "--restart")
       a.restart = value("--restart");
+    else if (s == "--petsc")
+      a.petsc_options += " " + value("--petsc");
     else if (s == "--quiet")
       a.quiet = true;
     else if (!s.empty() && s[0] != '-' && a.case_file.empty())
@@ -74,6 +81,11 @@ Args parse_args(int argc, char** argv) {
 int run(const Args& args, int rank) {
   if (args.case_file.empty()) throw InputError("(command line)", "", std::string("a case file\n") + kUsage);
   Config config = Config::load(args.case_file, args.sets);
+#if defined(TESSERA_HAVE_PETSC)
+  // Command-line PETSc options go in after the case's (fluid.poisson.petsc_options), so they win.
+  if (!args.petsc_options.empty() && PetscOptionsInsertString(nullptr, args.petsc_options.c_str()))
+    throw InputError("--petsc", args.petsc_options, "PETSc options, e.g. \"-poisson_pc_type gamg\"");
+#endif
   const std::string case_dir = fs::path(args.case_file).parent_path().string();
   auto scene = make_scene(config.root(), MPI_COMM_WORLD, case_dir.empty() ? "." : case_dir);
   config.check_unused();  // every key was read: anything left is unknown
@@ -94,8 +106,9 @@ int run(const Args& args, int rank) {
                 summary["status"].get<std::string>().c_str(), summary["steps"].get<long>(),
                 summary["time"].get<double>(), summary["wall_seconds"].get<double>());
     for (const auto& [k, v] : summary["quantities"].items()) std::printf("  %s: %s\n", k.c_str(), v.dump().c_str());
+    const std::string snapshots = summary["output"]["snapshots"].get<std::string>();
     std::printf("output: %s (summary.json, checkpoint.h5%s)\n", opt.output_dir.c_str(),
-                summary["output"]["snapshots"].get<std::string>().empty() ? "" : ", snapshots/particles.xmf");
+                snapshots.empty() ? "" : (", " + snapshots).c_str());
   }
   return summary["status"] == "completed" ? 0 : 3;
 }
@@ -104,6 +117,9 @@ int run(const Args& args, int rank) {
 
 int main(int argc, char** argv) {
   MPI_Init(&argc, &argv);
+#if defined(TESSERA_HAVE_PETSC)
+  PetscInitializeNoArguments();  // reads PETSC_OPTIONS; MPI stays ours
+#endif
   int rank = 0, code = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   try {
@@ -133,6 +149,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "tessera (rank %d): %s\n", rank, e.what());
     MPI_Abort(MPI_COMM_WORLD, 1);
   }
+#if defined(TESSERA_HAVE_PETSC)
+  PetscFinalize();
+#endif
   MPI_Finalize();
   return code;
 }

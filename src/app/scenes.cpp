@@ -5,10 +5,16 @@
 
 namespace tessera {
 
-std::unique_ptr<DemScene> make_scene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir) {
+std::unique_ptr<DemScene> make_dem_scene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir) {
   const std::string scene = root.choice("scene", {"deposition", "bed"});
   if (scene == "deposition") return make_deposition_scene(root, comm, case_dir);
   return make_bed_scene(root, comm, case_dir);
+}
+
+std::unique_ptr<Scene> make_scene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir) {
+  const std::string scene = root.choice("scene", {"deposition", "bed", "flow"});
+  if (scene == "flow") return make_flow_scene(root, comm, case_dir);
+  return make_dem_scene(root, comm, case_dir);
 }
 
 }  // namespace tessera

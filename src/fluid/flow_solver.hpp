@@ -86,7 +86,11 @@ class FlowSolver {
 
   double time() const { return time_; }
   long steps() const { return steps_; }
-  void set_clock(double time, long steps) { time_ = time, steps_ = steps, parity_ = steps; }
+  double last_dt() const { return last_dt_; }
+  // Restart: the clock, and the last step's dt (the growth limit starts from it).
+  void set_clock(double time, long steps, double last_dt) {
+    time_ = time, steps_ = steps, parity_ = steps, last_dt_ = last_dt;
+  }
 
   // Collective diagnostics over owned cells.
   double liquid_volume() const;
@@ -118,15 +122,15 @@ class FlowSolver {
   void fill_fraction_ghosts(std::vector<double>& f) const;
   void fill_velocity_ghosts(std::array<std::vector<double>, 3>& u) const;
   void fill_pressure_ghosts();
-  void sweep(int d, double dt);  // one direction of VOF + momentum advection
-  void reconstruct(int d);       // PLIC in owned cells and one layer beyond along d
-  void viscous(double dt);       // u <- u + dt div(tau) / rho
+  void sweep(int d, double dt, bool last);  // one direction of VOF + momentum advection
+  void reconstruct(int d);                  // PLIC in owned cells and one layer beyond along d
+  void viscous(double dt);                  // u <- u + dt div(tau) / rho
   PoissonStats project(double dt, bool with_gravity);
 
   FlowSettings settings_;
   std::unique_ptr<FluidGrid> grid_;
   std::unique_ptr<PressurePoisson> poisson_;
-  std::vector<double> f_, p_, rho_, mu_, indicator_;
+  std::vector<double> f_, p_, rho_, mu_, indicator_, dilatation_;
   std::array<std::vector<double>, 3> u_, uf_, work_;
   std::array<std::vector<double>, 4> plic_;  // nx, ny, nz, alpha of interface cells
   std::vector<double> flux_f_, flux_m_, rhs_, accel_;

@@ -2,6 +2,7 @@
 #include "fluid/pressure_poisson.hpp"
 
 #include <cmath>
+#include <sstream>
 
 #include "core/errors.hpp"
 
@@ -36,12 +37,27 @@ PressurePoisson::PressurePoisson(const FluidGrid& grid, const PoissonSettings& s
   check(KSPSetNormType(ksp_, KSP_NORM_UNPRECONDITIONED), "KSPSetNormType");
   PC pc;
   check(KSPGetPC(ksp_, &pc), "KSPGetPC");
+  if (settings_.geometric_multigrid) {
+    multigrid_ = std::make_unique<CellMultigrid>(grid);
+    check(PCSetType(pc, PCSHELL), "PCSetType");
+    check(PCShellSetContext(pc, multigrid_.get()), "PCShellSetContext");
+    check(PCShellSetApply(pc,
+                          [](PC p, Vec x, Vec y) -> PetscErrorCode {
+                            void* ctx;
+                            PCShellGetContext(p, &ctx);
+                            static_cast<CellMultigrid*>(ctx)->apply(x, y);
+                            return 0;
+                          }),
+          "PCShellSetApply");
+    check(PCShellSetName(pc, "Tessera cell-centred geometric multigrid"), "PCShellSetName");
+  } else {
 #if defined(PETSC_HAVE_HYPRE)
-  check(PCSetType(pc, PCHYPRE), "PCSetType");
-  check(PCHYPRESetType(pc, "boomeramg"), "PCHYPRESetType");
+    check(PCSetType(pc, PCHYPRE), "PCSetType");
+    check(PCHYPRESetType(pc, "boomeramg"), "PCHYPRESetType");
 #else
-  check(PCSetType(pc, PCGAMG), "PCSetType");
+    check(PCSetType(pc, PCGAMG), "PCSetType");
 #endif
+  }
   check(KSPSetTolerances(ksp_, settings_.rtol, settings_.atol, 1e30, settings_.max_iterations), "KSPSetTolerances");
   check(KSPSetInitialGuessNonzero(ksp_, PETSC_TRUE), "KSPSetInitialGuessNonzero");
   check(KSPSetFromOptions(ksp_), "KSPSetFromOptions");
@@ -64,6 +80,8 @@ std::string PressurePoisson::description() const {
   PCGetType(pc, &pt);
   std::string s = std::string(kt) + " + " + pt;
   if (std::string(pt) == "hypre") s += " (BoomerAMG)";
+  if (std::string(pt) == "shell" && multigrid_)
+    s = std::string(kt) + " + geometric multigrid (" + std::to_string(multigrid_->levels()) + " levels)";
   return s;
 }
 
@@ -108,6 +126,7 @@ void PressurePoisson::assemble(const std::vector<double>& rho) {
   check(MatAssemblyBegin(A_, MAT_FINAL_ASSEMBLY), "MatAssemblyBegin");
   check(MatAssemblyEnd(A_, MAT_FINAL_ASSEMBLY), "MatAssemblyEnd");
   const bool rebuild = settings_.reuse_preconditioner <= 1 || solves_ % settings_.reuse_preconditioner == 0;
+  if (multigrid_ && rebuild) multigrid_->set_coefficients(rho);
   check(KSPSetReusePreconditioner(ksp_, rebuild ? PETSC_FALSE : PETSC_TRUE), "KSPSetReusePreconditioner");
   check(KSPSetOperators(ksp_, A_, A_), "KSPSetOperators");
 }

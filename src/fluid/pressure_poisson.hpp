@@ -9,8 +9,10 @@
 // declared as its null space and removed from the right-hand side.
 //
 // Solved with PETSc KSP on the pressure DMDA: CG (unpreconditioned residual norm, so that the
-// tolerance means the same for every preconditioner) with algebraic multigrid by default; the
-// previous pressure is the initial guess. Options prefix `poisson_`: anything in the case's
+// tolerance means the same for every preconditioner) preconditioned by Tessera's cell-centred
+// geometric multigrid (cell_multigrid.hpp, `preconditioner: multigrid`, the default) or by any
+// PETSc preconditioner (`preconditioner: petsc`: hypre BoomerAMG unless -poisson_pc_type says
+// otherwise); the previous pressure is the initial guess. Options prefix `poisson_`: anything in the case's
 // fluid.poisson.petsc_options or on the command line (-poisson_pc_type gamg ...) overrides.
 // A solve that does not converge throws, never returns a silent step.
 #pragma once
@@ -19,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "fluid/cell_multigrid.hpp"
 #include "fluid/fluid_grid.hpp"
 
 namespace tessera {
@@ -27,8 +30,9 @@ struct PoissonSettings {
   double rtol = 1e-8;  // relative to |b|
   double atol = 0;     // absolute residual (units of the equation: m^3/s)
   int max_iterations = 500;
-  std::string petsc_options;     // inserted before KSPSetFromOptions, e.g. "-poisson_pc_type gamg"
-  int reuse_preconditioner = 1;  // rebuild the preconditioner every N solves (1 = every solve)
+  std::string petsc_options;        // inserted before KSPSetFromOptions, e.g. "-poisson_pc_type gamg"
+  int reuse_preconditioner = 1;     // rebuild the preconditioner every N solves (1 = every solve)
+  bool geometric_multigrid = true;  // false: a PETSc preconditioner (options decide which)
 };
 
 struct PoissonStats {
@@ -60,6 +64,7 @@ class PressurePoisson {
   Vec x_ = nullptr, b_ = nullptr;
   KSP ksp_ = nullptr;
   MatNullSpace nullspace_ = nullptr;
+  std::unique_ptr<CellMultigrid> multigrid_;
   bool singular_ = true;
   long solves_ = 0;
 };

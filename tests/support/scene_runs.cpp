@@ -31,7 +31,7 @@ BodyStates run_scene_on(int ranks, const std::string& yaml, const std::vector<st
   if (sub != MPI_COMM_NULL) {
     {
       Config c = Config::parse(yaml, sets);
-      auto scene = make_scene(c.root(), sub, ".");
+      auto scene = make_dem_scene(c.root(), sub, ".");
       c.check_unused();
       RunOptions opt;
       opt.output_dir = output_dir;

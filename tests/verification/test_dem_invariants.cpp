@@ -146,7 +146,7 @@ run: {end_time: 0.4, check_interval: 5 ms}
 )";
   Config c = Config::parse(yaml, {"solid.contact.pairs.1.friction=" + std::to_string(wall_friction)});
   // Frictionless walls leave slow sliding modes undamped for long: stop at the time limit there.
-  auto scene = make_scene(c.root(), MPI_COMM_SELF, ".");
+  auto scene = make_dem_scene(c.root(), MPI_COMM_SELF, ".");
   c.check_unused();
   RunOptions opt;
   opt.output_dir =

@@ -1,0 +1,232 @@
+// SPDX-License-Identifier: MIT
+#include "fluid/cell_multigrid.hpp"
+
+#include <algorithm>
+
+#include "core/errors.hpp"
+
+namespace tessera {
+namespace {
+
+void check(PetscErrorCode ierr, const char* what) {
+  if (ierr) throw RunError(std::string("PETSc error in ") + what + " (code " + std::to_string(int(ierr)) + ")");
+}
+
+constexpr long kCoarsestCells = 256;  // stop coarsening below this many cells in all
+
+template <class F>
+void for_owned(const std::array<int, 3>& s, const std::array<int, 3>& m, F&& fn) {
+  for (int k = s[2]; k < s[2] + m[2]; ++k)
+    for (int j = s[1]; j < s[1] + m[1]; ++j)
+      for (int i = s[0]; i < s[0] + m[0]; ++i) fn(i, j, k);
+}
+
+}  // namespace
+
+CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coarse)
+    : grid_(grid), pre_(pre), post_(post), coarse_(coarse) {
+  DM fine = grid.pressure_dm();
+  PetscInt M, N, P, pm, pn, pp;
+  check(DMDAGetInfo(fine, nullptr, &M, &N, &P, &pm, &pn, &pp, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr),
+        "DMDAGetInfo");
+  const PetscInt* own0[3];
+  check(DMDAGetOwnershipRanges(fine, &own0[0], &own0[1], &own0[2]), "DMDAGetOwnershipRanges");
+  std::array<int, 3> procs{int(pm), int(pn), int(pp)};
+  std::array<std::vector<PetscInt>, 3> own;
+  for (int d = 0; d < 3; ++d) own[d].assign(own0[d], own0[d] + procs[d]);
+  std::array<int, 3> n{int(M), int(N), int(P)}, ratio{1, 1, 1};
+  DMBoundaryType bt[3];
+  for (int d = 0; d < 3; ++d) bt[d] = grid.periodic(d) ? DM_BOUNDARY_PERIODIC : DM_BOUNDARY_GHOSTED;
+  while (true) {
+    auto L = std::make_unique<Level>();
+    L->n = n;
+    L->ratio = ratio;
+    check(DMDACreate3d(grid.comm(), bt[0], bt[1], bt[2], DMDA_STENCIL_STAR, n[0], n[1], n[2], procs[0], procs[1],
+                       procs[2], 1, 1, own[0].data(), own[1].data(), own[2].data(), &L->dm),
+          "DMDACreate3d (multigrid level)");
+    check(DMSetUp(L->dm), "DMSetUp");
+    PetscInt xs, ys, zs, xm, ym, zm, gxs, gys, gzs, gxm, gym, gzm;
+    check(DMDAGetCorners(L->dm, &xs, &ys, &zs, &xm, &ym, &zm), "DMDAGetCorners");
+    check(DMDAGetGhostCorners(L->dm, &gxs, &gys, &gzs, &gxm, &gym, &gzm), "DMDAGetGhostCorners");
+    L->s = {int(xs), int(ys), int(zs)};
+    L->m = {int(xm), int(ym), int(zm)};
+    L->gs = {int(gxs), int(gys), int(gzs)};
+    L->gm = {int(gxm), int(gym), int(gzm)};
+    L->stride = {1, L->gm[0], std::ptrdiff_t(L->gm[0]) * L->gm[1]};
+    check(DMCreateLocalVector(L->dm, &L->scratch), "DMCreateLocalVector");
+    const std::size_t size = std::size_t(L->gm[0]) * L->gm[1] * L->gm[2];
+    for (auto& c : L->coef) c.assign(size, 0.0);
+    L->diag.assign(size, 0.0);
+    L->x.assign(size, 0.0);
+    L->b.assign(size, 0.0);
+    L->r.assign(size, 0.0);
+    levels_.push_back(std::move(L));
+    // Halve every direction where every rank's block (and the whole) is even and stays >= 2
+    // cells per rank (the red-black colouring needs even periodic lengths too).
+    ratio = {1, 1, 1};
+    for (int d = 0; d < 3; ++d) {
+      bool ok = n[d] >= 4 && n[d] % 2 == 0;
+      for (PetscInt c : own[d]) ok = ok && c % 2 == 0 && c / 2 >= (procs[d] > 1 ? 2 : 1);
+      if (ok) ratio[d] = 2;
+    }
+    if (ratio == std::array<int, 3>{1, 1, 1} || long(n[0]) * n[1] * n[2] <= kCoarsestCells) break;
+    for (int d = 0; d < 3; ++d) {
+      n[d] /= ratio[d];
+      for (auto& c : own[d]) c /= ratio[d];
+    }
+  }
+}
+
+CellMultigrid::~CellMultigrid() {
+  for (auto& L : levels_) {
+    if (L->scratch) VecDestroy(&L->scratch);
+    if (L->dm) DMDestroy(&L->dm);
+  }
+}
+
+void CellMultigrid::exchange(Level& L, std::vector<double>& v) {
+  check(VecPlaceArray(L.scratch, v.data()), "VecPlaceArray");
+  check(DMLocalToLocalBegin(L.dm, L.scratch, INSERT_VALUES, L.scratch), "DMLocalToLocalBegin");
+  check(DMLocalToLocalEnd(L.dm, L.scratch, INSERT_VALUES, L.scratch), "DMLocalToLocalEnd");
+  check(VecResetArray(L.scratch), "VecResetArray");
+}
+
+void CellMultigrid::set_coefficients(const std::vector<double>& rho) {
+  const FluidGrid& g = grid_;
+  Level& F = *levels_[0];
+  const double h[3] = {g.h(0), g.h(1), g.h(2)};
+  const double area_over_h[3] = {h[1] * h[2] / h[0], h[0] * h[2] / h[1], h[0] * h[1] / h[2]};
+  // Finest level: the coefficients of pressure_poisson.cpp, for the low faces of owned cells and
+  // the high face of the last owned cell along each direction. An outflow face couples to a
+  // ghost held at 0 (p = 0 on the face, half a cell away): twice the coefficient.
+  for (int d = 0; d < 3; ++d) {
+    std::array<int, 3> m = F.m;
+    m[d] += 1;
+    const int n = g.cells()[d];
+    for_owned(F.s, m, [&](int i, int j, int k) {
+      const int idx[3] = {i, j, k};
+      const std::size_t c = g.at(i, j, k), fc = F.at(i, j, k);
+      double coef;
+      if (!g.periodic(d) && (idx[d] == 0 || idx[d] == n)) {
+        const bool low = idx[d] == 0;
+        coef = g.boundary(d, low ? 0 : 1) == BoundaryKind::outflow ? 2 * area_over_h[d] / rho[low ? c : c - g.stride(d)]
+                                                                   : 0.0;
+      } else {
+        coef = area_over_h[d] / (0.5 * (rho[c] + rho[c - g.stride(d)]));
+      }
+      F.coef[d][fc] = coef;
+    });
+  }
+  // Coarse levels.
+  for (std::size_t l = 1; l < levels_.size(); ++l) {
+    Level& f = *levels_[l - 1];
+    Level& C = *levels_[l];
+    const auto& r = C.ratio;
+    for (int d = 0; d < 3; ++d) {
+      std::array<int, 3> m = C.m;
+      m[d] += 1;
+      for_owned(C.s, m, [&](int I, int J, int K) {
+        const int base[3] = {I * r[0], J * r[1], K * r[2]};
+        int span[3] = {r[0], r[1], r[2]};
+        span[d] = 1;  // the fine faces on the coarse face's plane
+        double sum = 0;
+        for (int c = 0; c < span[2]; ++c)
+          for (int b = 0; b < span[1]; ++b)
+            for (int a = 0; a < span[0]; ++a) sum += f.coef[d][f.at(base[0] + a, base[1] + b, base[2] + c)];
+        C.coef[d][C.at(I, J, K)] = sum / r[d];
+      });
+    }
+  }
+  for (auto& Lp : levels_) {
+    Level& L = *Lp;
+    for_owned(L.s, L.m, [&](int i, int j, int k) {
+      const std::size_t c = L.at(i, j, k);
+      double s = 0;
+      for (int d = 0; d < 3; ++d) s += L.coef[d][c] + L.coef[d][c + L.stride[d]];
+      L.diag[c] = s > 0 ? s : 1.0;
+    });
+  }
+}
+
+void CellMultigrid::smooth(Level& L, int sweeps, bool reverse) {
+  for (int sweep = 0; sweep < sweeps; ++sweep)
+    for (int pass = 0; pass < 2; ++pass) {
+      const int colour = reverse ? 1 - pass : pass;
+      for (int k = L.s[2]; k < L.s[2] + L.m[2]; ++k)
+        for (int j = L.s[1]; j < L.s[1] + L.m[1]; ++j) {
+          int i0 = L.s[0];
+          if (((i0 + j + k) & 1) != colour) ++i0;
+          for (int i = i0; i < L.s[0] + L.m[0]; i += 2) {
+            const std::size_t c = L.at(i, j, k);
+            double s = L.b[c];
+            for (int d = 0; d < 3; ++d) {
+              const std::ptrdiff_t st = L.stride[d];
+              s += L.coef[d][c] * L.x[c - st] + L.coef[d][c + st] * L.x[c + st];
+            }
+            L.x[c] = s / L.diag[c];
+          }
+        }
+      exchange(L, L.x);
+    }
+}
+
+void CellMultigrid::residual(Level& L) {
+  for_owned(L.s, L.m, [&](int i, int j, int k) {
+    const std::size_t c = L.at(i, j, k);
+    double ax = L.diag[c] * L.x[c];
+    for (int d = 0; d < 3; ++d) {
+      const std::ptrdiff_t st = L.stride[d];
+      ax -= L.coef[d][c] * L.x[c - st] + L.coef[d][c + st] * L.x[c + st];
+    }
+    L.r[c] = L.b[c] - ax;
+  });
+}
+
+void CellMultigrid::cycle(std::size_t l) {
+  Level& L = *levels_[l];
+  if (l + 1 == levels_.size()) {
+    smooth(L, coarse_ / 2, false);
+    smooth(L, coarse_ / 2, true);
+    return;
+  }
+  smooth(L, pre_, false);
+  residual(L);
+  Level& C = *levels_[l + 1];
+  const auto& r = C.ratio;
+  for_owned(C.s, C.m, [&](int I, int J, int K) {
+    double s = 0;
+    for (int c = 0; c < r[2]; ++c)
+      for (int b = 0; b < r[1]; ++b)
+        for (int a = 0; a < r[0]; ++a) s += L.r[L.at(I * r[0] + a, J * r[1] + b, K * r[2] + c)];
+    const std::size_t cc = C.at(I, J, K);
+    C.b[cc] = s;
+  });
+  std::fill(C.x.begin(), C.x.end(), 0.0);
+  cycle(l + 1);
+  for_owned(C.s, C.m, [&](int I, int J, int K) {
+    const double e = C.x[C.at(I, J, K)];
+    for (int c = 0; c < r[2]; ++c)
+      for (int b = 0; b < r[1]; ++b)
+        for (int a = 0; a < r[0]; ++a) L.x[L.at(I * r[0] + a, J * r[1] + b, K * r[2] + c)] += e;
+  });
+  exchange(L, L.x);
+  smooth(L, post_, true);
+}
+
+void CellMultigrid::apply(Vec xin, Vec yout) {
+  Level& F = *levels_[0];
+  const PetscScalar* in;
+  check(VecGetArrayRead(xin, &in), "VecGetArrayRead");
+  std::size_t n = 0;
+  for_owned(F.s, F.m, [&](int i, int j, int k) { F.b[F.at(i, j, k)] = in[n++]; });
+  check(VecRestoreArrayRead(xin, &in), "VecRestoreArrayRead");
+  std::fill(F.x.begin(), F.x.end(), 0.0);
+  cycle(0);
+  PetscScalar* out;
+  check(VecGetArray(yout, &out), "VecGetArray");
+  n = 0;
+  for_owned(F.s, F.m, [&](int i, int j, int k) { out[n++] = F.x[F.at(i, j, k)]; });
+  check(VecRestoreArray(yout, &out), "VecRestoreArray");
+}
+
+}  // namespace tessera

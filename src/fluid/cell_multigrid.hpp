@@ -1,0 +1,66 @@
+// SPDX-License-Identifier: MIT
+// Geometric multigrid for the cell-centred pressure operator (docs/theory.md F9a), used as the
+// preconditioner of CG (a PETSc PCSHELL).
+//
+// The operator on every level is the 7-point flux form (A x)_c = sum_f c_f (x_c - x_nb) + e_c x_c
+// with face coefficients c_f = A_f / (h_f rho_f) and e_c the outflow (p = 0) terms. A coarse cell
+// is 2 fine cells along each direction that can be halved (semi-coarsening where not: a one-cell
+// slab keeps its one cell); a coarse face coefficient is the sum of the fine coefficients across
+// it divided by the ratio along its normal (fine cells in series), the coarse e the same. Fine
+// residuals are summed into the coarse cell (the rows are cell integrals), corrections are
+// injected back (the transpose): with red-black Gauss-Seidel smoothing, forward before and
+// reversed after the coarse correction, the V-cycle is a symmetric positive (semi-)definite
+// preconditioner, as CG needs. Red-black sweeps give the same numbers on any rank count.
+//
+// Each level lives on its own DMDA with the fine level's process grid and halved ownership ranges
+// (ghost width 1, filled by DMLocalToLocal); coarsening stops where a rank's block could not be
+// halved, and the coarsest level gets many sweeps.
+#pragma once
+#include <petscdmda.h>
+
+#include <array>
+#include <memory>
+#include <vector>
+
+#include "fluid/fluid_grid.hpp"
+
+namespace tessera {
+
+class CellMultigrid {
+ public:
+  CellMultigrid(const FluidGrid& grid, int pre_sweeps = 2, int post_sweeps = 2, int coarse_sweeps = 40);
+  ~CellMultigrid();
+  CellMultigrid(const CellMultigrid&) = delete;
+  CellMultigrid& operator=(const CellMultigrid&) = delete;
+
+  // Face coefficients of the finest level from the cell densities (field layout of `grid`,
+  // ghosts valid); builds the coarse levels.
+  void set_coefficients(const std::vector<double>& rho);
+  // y = M^-1 x for PETSc vectors on the pressure DMDA (one V-cycle from a zero guess).
+  void apply(Vec x, Vec y);
+  int levels() const { return int(levels_.size()); }
+
+ private:
+  struct Level {
+    DM dm = nullptr;
+    Vec scratch = nullptr;
+    std::array<int, 3> n{}, s{}, m{}, gs{}, gm{};
+    std::array<std::ptrdiff_t, 3> stride{};
+    std::array<int, 3> ratio{1, 1, 1};        // to the next finer level
+    std::array<std::vector<double>, 3> coef;  // face on the low side of each cell
+    std::vector<double> extra, diag, x, b, r;
+    std::size_t at(int i, int j, int k) const {
+      return (std::size_t(k - gs[2]) * gm[1] + std::size_t(j - gs[1])) * gm[0] + std::size_t(i - gs[0]);
+    }
+  };
+  void exchange(Level& L, std::vector<double>& v);
+  void smooth(Level& L, int sweeps, bool reverse);
+  void residual(Level& L);
+  void cycle(std::size_t l);
+
+  const FluidGrid& grid_;
+  int pre_, post_, coarse_;
+  std::vector<std::unique_ptr<Level>> levels_;
+};
+
+}  // namespace tessera

@@ -1,0 +1,160 @@
+// SPDX-License-Identifier: MIT
+#include "fluid/fluid_io.hpp"
+
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include "core/errors.hpp"
+#include "core/h5_file.hpp"
+#include "solid/dem_io.hpp"
+
+namespace tessera {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr const char* kFormat = "tessera-flow-checkpoint-1";
+
+// This rank's block of a (z, y, x) array: offsets and counts in that order. `extra_high[d]` adds
+// the domain's high face along d on the rank that holds it (face arrays).
+struct Block {
+  std::size_t global[3], offset[3], count[3];
+  std::array<int, 3> lo, hi;  // global index box (x, y, z), hi exclusive
+};
+
+Block block_of(const FluidGrid& g, int face_dir = -1) {
+  Block b;
+  for (int d = 0; d < 3; ++d) {
+    const bool extra = d == face_dir && !g.periodic(d) && g.end(d) == g.cells()[d];
+    const int n = g.cells()[d] + (d == face_dir && !g.periodic(d) ? 1 : 0);
+    b.lo[d] = g.begin(d);
+    b.hi[d] = g.end(d) + (extra ? 1 : 0);
+    b.global[2 - d] = std::size_t(n);
+    b.offset[2 - d] = std::size_t(b.lo[d]);
+    b.count[2 - d] = std::size_t(b.hi[d] - b.lo[d]);
+  }
+  return b;
+}
+
+std::vector<double> pack(const FluidGrid& g, const Block& b, std::initializer_list<const std::vector<double>*> comps) {
+  std::vector<double> out;
+  out.reserve(b.count[0] * b.count[1] * b.count[2] * comps.size());
+  for (int k = b.lo[2]; k < b.hi[2]; ++k)
+    for (int j = b.lo[1]; j < b.hi[1]; ++j)
+      for (int i = b.lo[0]; i < b.hi[0]; ++i)
+        for (const auto* c : comps) out.push_back((*c)[g.at(i, j, k)]);
+  return out;
+}
+
+void unpack(const FluidGrid& g, const Block& b, const std::vector<double>& in,
+            std::initializer_list<std::vector<double>*> comps) {
+  std::size_t n = 0;
+  for (int k = b.lo[2]; k < b.hi[2]; ++k)
+    for (int j = b.lo[1]; j < b.hi[1]; ++j)
+      for (int i = b.lo[0]; i < b.hi[0]; ++i)
+        for (auto* c : comps) (*c)[g.at(i, j, k)] = in[n++];
+}
+
+int comm_rank(MPI_Comm comm) {
+  int r = 0;
+  MPI_Comm_rank(comm, &r);
+  return r;
+}
+
+}  // namespace
+
+void FieldSeries::write(const FlowSolver& flow) {
+  const FluidGrid& g = flow.grid();
+  const bool root = comm_rank(g.comm()) == 0;
+  if (root) fs::create_directories(dir_);
+  MPI_Barrier(g.comm());
+  char name[64];
+  std::snprintf(name, sizeof name, "fields_%05d.h5", count());
+  {
+    H5File f = H5File::create(dir_ + "/" + name, g.comm());
+    f.set_attribute("time", flow.time());
+    f.set_attribute("steps", flow.steps());
+    const Block b = block_of(g);
+    f.write_block("liquid_fraction", pack(g, b, {&flow.fraction()}).data(), b.global, b.offset, b.count, 1);
+    f.write_block("velocity", pack(g, b, {&flow.velocity(0), &flow.velocity(1), &flow.velocity(2)}).data(), b.global,
+                  b.offset, b.count, 3);
+    f.write_block("pressure", pack(g, b, {&flow.pressure()}).data(), b.global, b.offset, b.count, 1);
+  }
+  times_.push_back(flow.time());
+  if (!root) return;
+  // XDMF index: a 3DCoRectMesh (dimensions, origin and spacing in z, y, x order) with cell data.
+  const auto& n = g.cells();
+  std::ostringstream x;
+  x.precision(17);
+  x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n<Domain>\n"
+    << "<Grid Name=\"flow\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+  const std::string dims = std::to_string(n[2]) + " " + std::to_string(n[1]) + " " + std::to_string(n[0]);
+  for (int s = 0; s < count(); ++s) {
+    char file[64];
+    std::snprintf(file, sizeof file, "fields_%05d.h5", s);
+    x << "<Grid Name=\"fields\" GridType=\"Uniform\">\n<Time Value=\"" << times_[s] << "\"/>\n"
+      << "<Topology TopologyType=\"3DCoRectMesh\" Dimensions=\"" << n[2] + 1 << " " << n[1] + 1 << " " << n[0] + 1
+      << "\"/>\n<Geometry GeometryType=\"ORIGIN_DXDYDZ\">\n"
+      << "<DataItem Dimensions=\"3\" Format=\"XML\">" << g.lo().z << " " << g.lo().y << " " << g.lo().x
+      << "</DataItem>\n<DataItem Dimensions=\"3\" Format=\"XML\">" << g.h(2) << " " << g.h(1) << " " << g.h(0)
+      << "</DataItem>\n</Geometry>\n";
+    auto attr = [&](const char* nm, const char* type, int comps) {
+      x << "<Attribute Name=\"" << nm << "\" AttributeType=\"" << type << "\" Center=\"Cell\">\n"
+        << "<DataItem Dimensions=\"" << dims << (comps > 1 ? " 3" : "")
+        << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << file << ":/" << nm << "</DataItem>\n"
+        << "</Attribute>\n";
+    };
+    attr("liquid_fraction", "Scalar", 1);
+    attr("velocity", "Vector", 3);
+    attr("pressure", "Scalar", 1);
+    x << "</Grid>\n";
+  }
+  x << "</Grid>\n</Domain>\n</Xdmf>\n";
+  write_file_atomically(dir_ + "/fields.xmf", x.str());
+}
+
+void write_flow_checkpoint(const std::string& path, const FlowSolver& flow) {
+  const FluidGrid& g = flow.grid();
+  const std::string tmp = path + ".tmp";
+  {
+    H5File f = H5File::create(tmp, g.comm());
+    f.set_attribute("format", std::string(kFormat));
+    f.set_attribute("time", flow.time());
+    f.set_attribute("steps", flow.steps());
+    f.set_attribute("last_dt", flow.last_dt());
+    const Block b = block_of(g);
+    f.write_block("liquid_fraction", pack(g, b, {&flow.fraction()}).data(), b.global, b.offset, b.count, 1);
+    f.write_block("velocity", pack(g, b, {&flow.velocity(0), &flow.velocity(1), &flow.velocity(2)}).data(), b.global,
+                  b.offset, b.count, 3);
+    f.write_block("pressure", pack(g, b, {&flow.pressure()}).data(), b.global, b.offset, b.count, 1);
+    for (int d = 0; d < 3; ++d) {
+      const Block fb = block_of(g, d);
+      const std::string nm = std::string("face_velocity_") + "xyz"[d];
+      f.write_block(nm, pack(g, fb, {&flow.face_velocity(d)}).data(), fb.global, fb.offset, fb.count, 1);
+    }
+  }
+  MPI_Barrier(g.comm());
+  if (comm_rank(g.comm()) == 0) fs::rename(tmp, path);
+  MPI_Barrier(g.comm());
+}
+
+void read_flow_checkpoint(const std::string& path, FlowSolver& flow) {
+  const FluidGrid& g = flow.grid();
+  H5File f = H5File::open_read(path, g.comm());
+  if (!f.has("liquid_fraction") || f.attribute_string("format") != kFormat)
+    throw InputError("--restart", path, std::string("a flow checkpoint (") + kFormat + ")");
+  const Block b = block_of(g);
+  unpack(g, b, f.read_block("liquid_fraction", b.global, b.offset, b.count, 1), {&flow.mutable_fraction()});
+  unpack(g, b, f.read_block("velocity", b.global, b.offset, b.count, 3),
+         {&flow.mutable_velocity(0), &flow.mutable_velocity(1), &flow.mutable_velocity(2)});
+  unpack(g, b, f.read_block("pressure", b.global, b.offset, b.count, 1), {&flow.mutable_pressure()});
+  for (int d = 0; d < 3; ++d) {
+    const Block fb = block_of(g, d);
+    const std::string nm = std::string("face_velocity_") + "xyz"[d];
+    unpack(g, fb, f.read_block(nm, fb.global, fb.offset, fb.count, 1), {&flow.mutable_face_velocity(d)});
+  }
+  flow.set_clock(f.attribute_double("time"), f.attribute_long("steps"), f.attribute_double("last_dt"));
+  flow.refresh();
+}
+
+}  // namespace tessera
