@@ -12,7 +12,7 @@ build_dir=${TESSERA_BUILD_DIR:-build}
 
 packages=(build-essential cmake pkg-config openmpi-bin libopenmpi-dev libyaml-cpp-dev
           libhdf5-openmpi-dev nlohmann-json3-dev libeigen3-dev libmetis-dev libgtest-dev
-          petsc-dev python3 python3-numpy python3-matplotlib)
+          petsc-dev python3 python3-numpy python3-matplotlib python3-h5py)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -58,7 +58,7 @@ double volume_sorted(const Sorted& c) {
   return 1 - volume_lower_half(c.m1, c.m2, c.m3, 1 - c.alpha);
 }
 
-// Inverse of volume_lower_half for 0 < f <= 1/2 (F6): closed form on the first two pieces and the
+// Inverse of volume_lower_half for 0 < f <= 1/2 (F5): closed form on the first two pieces and the
 // linear one; safeguarded Newton on the two cubic pieces (monotone, at most a few iterations).
 double alpha_lower_half(double m1, double m2, double m3, double f) {
   const double m12 = m1 + m2;

@@ -1,12 +1,12 @@
 // SPDX-License-Identifier: MIT
-// Piecewise-linear interface calculation (PLIC) in one cell (docs/theory.md F5-F7).
+// Piecewise-linear interface calculation (PLIC) in one cell (docs/theory.md F5).
 //
 // In a cell mapped to the unit cube, the interface is the plane n . x = alpha and the liquid is
 // the side n . x < alpha (n points out of the liquid). The volume it cuts off is
-//   V(n, alpha)                                                                            (F5)
+//   V(n, alpha)
 // in closed form (Scardovelli & Zaleski 2000, J. Comput. Phys. 164, 228), and alpha(n, f) is its
-// inverse (F6). The liquid volume carried through a face in one direction-split sweep is the part
-// of the upwind cell's polyhedron inside the slab swept by the face velocity (F7).
+// inverse. The liquid volume carried through a face in one direction-split sweep is the part
+// of the upwind cell's polyhedron inside the slab swept by the face velocity.
 #pragma once
 
 namespace tessera::plic {
