@@ -54,9 +54,11 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
     L->gm = {int(gxm), int(gym), int(gzm)};
     L->stride = {1, L->gm[0], std::ptrdiff_t(L->gm[0]) * L->gm[1]};
     check(DMCreateLocalVector(L->dm, &L->scratch), "DMCreateLocalVector");
+    L->needs_exchange = procs[0] * procs[1] * procs[2] > 1 || grid.periodic(0) || grid.periodic(1) || grid.periodic(2);
     const std::size_t size = std::size_t(L->gm[0]) * L->gm[1] * L->gm[2];
     for (auto& c : L->coef) c.assign(size, 0.0);
     L->diag.assign(size, 0.0);
+    L->diag_true.assign(size, 0.0);
     L->x.assign(size, 0.0);
     L->b.assign(size, 0.0);
     L->r.assign(size, 0.0);
@@ -85,13 +87,14 @@ CellMultigrid::~CellMultigrid() {
 }
 
 void CellMultigrid::exchange(Level& L, std::vector<double>& v) {
+  if (!L.needs_exchange) return;
   check(VecPlaceArray(L.scratch, v.data()), "VecPlaceArray");
   check(DMLocalToLocalBegin(L.dm, L.scratch, INSERT_VALUES, L.scratch), "DMLocalToLocalBegin");
   check(DMLocalToLocalEnd(L.dm, L.scratch, INSERT_VALUES, L.scratch), "DMLocalToLocalEnd");
   check(VecResetArray(L.scratch), "VecResetArray");
 }
 
-void CellMultigrid::set_coefficients(const std::vector<double>& rho) {
+void CellMultigrid::set_coefficients(const std::vector<double>& rho, bool coarse) {
   const FluidGrid& g = grid_;
   Level& F = *levels_[0];
   const double h[3] = {g.h(0), g.h(1), g.h(2)};
@@ -118,7 +121,7 @@ void CellMultigrid::set_coefficients(const std::vector<double>& rho) {
     });
   }
   // Coarse levels.
-  for (std::size_t l = 1; l < levels_.size(); ++l) {
+  for (std::size_t l = 1; coarse && l < levels_.size(); ++l) {
     Level& f = *levels_[l - 1];
     Level& C = *levels_[l];
     const auto& r = C.ratio;
@@ -137,12 +140,13 @@ void CellMultigrid::set_coefficients(const std::vector<double>& rho) {
       });
     }
   }
-  for (auto& Lp : levels_) {
-    Level& L = *Lp;
+  for (std::size_t l = 0; l < (coarse ? levels_.size() : 1); ++l) {
+    Level& L = *levels_[l];
     for_owned(L.s, L.m, [&](int i, int j, int k) {
       const std::size_t c = L.at(i, j, k);
       double s = 0;
       for (int d = 0; d < 3; ++d) s += L.coef[d][c] + L.coef[d][c + L.stride[d]];
+      L.diag_true[c] = s;
       L.diag[c] = s > 0 ? s : 1.0;
     });
   }
@@ -211,6 +215,29 @@ void CellMultigrid::cycle(std::size_t l) {
   });
   exchange(L, L.x);
   smooth(L, post_, true);
+}
+
+void CellMultigrid::apply_operator(Vec xin, Vec yout) {
+  Level& F = *levels_[0];
+  const PetscScalar* in;
+  check(VecGetArrayRead(xin, &in), "VecGetArrayRead");
+  std::size_t n = 0;
+  for_owned(F.s, F.m, [&](int i, int j, int k) { F.x[F.at(i, j, k)] = in[n++]; });
+  check(VecRestoreArrayRead(xin, &in), "VecRestoreArrayRead");
+  exchange(F, F.x);
+  PetscScalar* out;
+  check(VecGetArray(yout, &out), "VecGetArray");
+  n = 0;
+  for_owned(F.s, F.m, [&](int i, int j, int k) {
+    const std::size_t c = F.at(i, j, k);
+    double ax = F.diag_true[c] * F.x[c];
+    for (int d = 0; d < 3; ++d) {
+      const std::ptrdiff_t st = F.stride[d];
+      ax -= F.coef[d][c] * F.x[c - st] + F.coef[d][c + st] * F.x[c + st];
+    }
+    out[n++] = ax;
+  });
+  check(VecRestoreArray(yout, &out), "VecRestoreArray");
 }
 
 void CellMultigrid::apply(Vec xin, Vec yout) {

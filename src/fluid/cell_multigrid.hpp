@@ -34,21 +34,25 @@ class CellMultigrid {
   CellMultigrid& operator=(const CellMultigrid&) = delete;
 
   // Face coefficients of the finest level from the cell densities (field layout of `grid`,
-  // ghosts valid); builds the coarse levels.
-  void set_coefficients(const std::vector<double>& rho);
+  // ghosts valid); and, when `coarse`, the coarse levels.
+  void set_coefficients(const std::vector<double>& rho, bool coarse = true);
   // y = M^-1 x for PETSc vectors on the pressure DMDA (one V-cycle from a zero guess).
   void apply(Vec x, Vec y);
+  // y = A x with the finest level's coefficients: the operator itself, matrix-free (the same
+  // coefficients pressure_poisson.cpp assembles for PETSc preconditioners).
+  void apply_operator(Vec x, Vec y);
   int levels() const { return int(levels_.size()); }
 
  private:
   struct Level {
     DM dm = nullptr;
     Vec scratch = nullptr;
+    bool needs_exchange = true;  // false on one rank without periodic directions: no ghosts to fill
     std::array<int, 3> n{}, s{}, m{}, gs{}, gm{};
     std::array<std::ptrdiff_t, 3> stride{};
-    std::array<int, 3> ratio{1, 1, 1};        // to the next finer level
-    std::array<std::vector<double>, 3> coef;  // face on the low side of each cell
-    std::vector<double> extra, diag, x, b, r;
+    std::array<int, 3> ratio{1, 1, 1};             // to the next finer level
+    std::array<std::vector<double>, 3> coef;       // face on the low side of each cell
+    std::vector<double> diag, diag_true, x, b, r;  // diag: zero rows (isolated cells) get 1 for smoothing
     std::size_t at(int i, int j, int k) const {
       return (std::size_t(k - gs[2]) * gm[1] + std::size_t(j - gs[1])) * gm[0] + std::size_t(i - gs[0]);
     }

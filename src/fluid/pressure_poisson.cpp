@@ -21,7 +21,27 @@ PressurePoisson::PressurePoisson(const FluidGrid& grid, const PoissonSettings& s
     for (int side = 0; side < 2; ++side)
       if (grid.boundary(d, side) == BoundaryKind::outflow) singular_ = false;
   DM dm = grid.pressure_dm();
-  check(DMCreateMatrix(dm, &A_), "DMCreateMatrix");
+  if (settings_.geometric_multigrid) {
+    // Matrix-free: the multigrid's finest level applies the operator from its face coefficients.
+    multigrid_ = std::make_unique<CellMultigrid>(grid);
+    PetscInt local, global;
+    Vec probe;
+    check(DMCreateGlobalVector(dm, &probe), "DMCreateGlobalVector");
+    check(VecGetLocalSize(probe, &local), "VecGetLocalSize");
+    check(VecGetSize(probe, &global), "VecGetSize");
+    check(VecDestroy(&probe), "VecDestroy");
+    check(MatCreateShell(grid.comm(), local, local, global, global, multigrid_.get(), &A_), "MatCreateShell");
+    check(MatShellSetOperation(A_, MATOP_MULT,
+                               reinterpret_cast<void (*)(void)>(+[](Mat m, Vec x, Vec y) -> PetscErrorCode {
+                                 void* ctx;
+                                 MatShellGetContext(m, &ctx);
+                                 static_cast<CellMultigrid*>(ctx)->apply_operator(x, y);
+                                 return 0;
+                               })),
+          "MatShellSetOperation");
+  } else {
+    check(DMCreateMatrix(dm, &A_), "DMCreateMatrix");
+  }
   check(MatSetOption(A_, MAT_SYMMETRIC, PETSC_TRUE), "MatSetOption");
   check(DMCreateGlobalVector(dm, &x_), "DMCreateGlobalVector");
   check(VecDuplicate(x_, &b_), "VecDuplicate");
@@ -38,7 +58,6 @@ PressurePoisson::PressurePoisson(const FluidGrid& grid, const PoissonSettings& s
   PC pc;
   check(KSPGetPC(ksp_, &pc), "KSPGetPC");
   if (settings_.geometric_multigrid) {
-    multigrid_ = std::make_unique<CellMultigrid>(grid);
     check(PCSetType(pc, PCSHELL), "PCSetType");
     check(PCShellSetContext(pc, multigrid_.get()), "PCShellSetContext");
     check(PCShellSetApply(pc,
@@ -87,6 +106,14 @@ std::string PressurePoisson::description() const {
 
 void PressurePoisson::assemble(const std::vector<double>& rho) {
   const FluidGrid& g = grid_;
+  const bool rebuild = settings_.reuse_preconditioner <= 1 || solves_ % settings_.reuse_preconditioner == 0;
+  if (multigrid_) {
+    // The operator is the multigrid's finest level: its coefficients are always current; a reused
+    // preconditioner keeps the coarse levels only.
+    multigrid_->set_coefficients(rho, rebuild);
+    check(KSPSetOperators(ksp_, A_, A_), "KSPSetOperators");
+    return;
+  }
   check(MatZeroEntries(A_), "MatZeroEntries");
   const double h[3] = {g.h(0), g.h(1), g.h(2)};
   const double area_over_h[3] = {h[1] * h[2] / h[0], h[0] * h[2] / h[1], h[0] * h[1] / h[2]};
@@ -125,8 +152,6 @@ void PressurePoisson::assemble(const std::vector<double>& rho) {
       }
   check(MatAssemblyBegin(A_, MAT_FINAL_ASSEMBLY), "MatAssemblyBegin");
   check(MatAssemblyEnd(A_, MAT_FINAL_ASSEMBLY), "MatAssemblyEnd");
-  const bool rebuild = settings_.reuse_preconditioner <= 1 || solves_ % settings_.reuse_preconditioner == 0;
-  if (multigrid_ && rebuild) multigrid_->set_coefficients(rho);
   check(KSPSetReusePreconditioner(ksp_, rebuild ? PETSC_FALSE : PETSC_TRUE), "KSPSetReusePreconditioner");
   check(KSPSetOperators(ksp_, A_, A_), "KSPSetOperators");
 }
