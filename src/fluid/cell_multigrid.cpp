@@ -57,7 +57,7 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
     L->needs_exchange = procs[0] * procs[1] * procs[2] > 1 || grid.periodic(0) || grid.periodic(1) || grid.periodic(2);
     const std::size_t size = std::size_t(L->gm[0]) * L->gm[1] * L->gm[2];
     for (auto& c : L->coef) c.assign(size, 0.0);
-    L->diag.assign(size, 0.0);
+    L->inv_diag.assign(size, 0.0);
     L->diag_true.assign(size, 0.0);
     L->x.assign(size, 0.0);
     L->b.assign(size, 0.0);
@@ -147,7 +147,7 @@ void CellMultigrid::set_coefficients(const std::vector<double>& rho, bool coarse
       double s = 0;
       for (int d = 0; d < 3; ++d) s += L.coef[d][c] + L.coef[d][c + L.stride[d]];
       L.diag_true[c] = s;
-      L.diag[c] = s > 0 ? s : 1.0;
+      L.inv_diag[c] = s > 0 ? 1 / s : 1.0;
     });
   }
 }
@@ -167,7 +167,7 @@ void CellMultigrid::smooth(Level& L, int sweeps, bool reverse) {
               const std::ptrdiff_t st = L.stride[d];
               s += L.coef[d][c] * L.x[c - st] + L.coef[d][c + st] * L.x[c + st];
             }
-            L.x[c] = s / L.diag[c];
+            L.x[c] = s * L.inv_diag[c];
           }
         }
       exchange(L, L.x);
@@ -177,7 +177,7 @@ void CellMultigrid::smooth(Level& L, int sweeps, bool reverse) {
 void CellMultigrid::residual(Level& L) {
   for_owned(L.s, L.m, [&](int i, int j, int k) {
     const std::size_t c = L.at(i, j, k);
-    double ax = L.diag[c] * L.x[c];
+    double ax = L.diag_true[c] * L.x[c];
     for (int d = 0; d < 3; ++d) {
       const std::ptrdiff_t st = L.stride[d];
       ax -= L.coef[d][c] * L.x[c - st] + L.coef[d][c + st] * L.x[c + st];

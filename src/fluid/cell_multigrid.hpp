@@ -14,7 +14,7 @@
 //
 // Each level lives on its own DMDA with the fine level's process grid and halved ownership ranges
 // (ghost width 1, filled by DMLocalToLocal); coarsening stops where a rank's block could not be
-// halved, and the coarsest level gets many sweeps.
+// halved, and the coarsest level gets many sweeps (20 by default).
 #pragma once
 #include <petscdmda.h>
 
@@ -28,7 +28,7 @@ namespace tessera {
 
 class CellMultigrid {
  public:
-  CellMultigrid(const FluidGrid& grid, int pre_sweeps = 2, int post_sweeps = 2, int coarse_sweeps = 40);
+  CellMultigrid(const FluidGrid& grid, int pre_sweeps = 2, int post_sweeps = 2, int coarse_sweeps = 20);
   ~CellMultigrid();
   CellMultigrid(const CellMultigrid&) = delete;
   CellMultigrid& operator=(const CellMultigrid&) = delete;
@@ -50,9 +50,9 @@ class CellMultigrid {
     bool needs_exchange = true;  // false on one rank without periodic directions: no ghosts to fill
     std::array<int, 3> n{}, s{}, m{}, gs{}, gm{};
     std::array<std::ptrdiff_t, 3> stride{};
-    std::array<int, 3> ratio{1, 1, 1};             // to the next finer level
-    std::array<std::vector<double>, 3> coef;       // face on the low side of each cell
-    std::vector<double> diag, diag_true, x, b, r;  // diag: zero rows (isolated cells) get 1 for smoothing
+    std::array<int, 3> ratio{1, 1, 1};                 // to the next finer level
+    std::array<std::vector<double>, 3> coef;           // face on the low side of each cell
+    std::vector<double> inv_diag, diag_true, x, b, r;  // inv_diag: 1 for a zero row (an isolated cell)
     std::size_t at(int i, int j, int k) const {
       return (std::size_t(k - gs[2]) * gm[1] + std::size_t(j - gs[1])) * gm[0] + std::size_t(i - gs[0]);
     }

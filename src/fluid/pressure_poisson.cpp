@@ -23,7 +23,8 @@ PressurePoisson::PressurePoisson(const FluidGrid& grid, const PoissonSettings& s
   DM dm = grid.pressure_dm();
   if (settings_.geometric_multigrid) {
     // Matrix-free: the multigrid's finest level applies the operator from its face coefficients.
-    multigrid_ = std::make_unique<CellMultigrid>(grid);
+    multigrid_ =
+        std::make_unique<CellMultigrid>(grid, settings_.pre_sweeps, settings_.post_sweeps, settings_.coarse_sweeps);
     PetscInt local, global;
     Vec probe;
     check(DMCreateGlobalVector(dm, &probe), "DMCreateGlobalVector");

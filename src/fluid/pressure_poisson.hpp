@@ -33,6 +33,7 @@ struct PoissonSettings {
   std::string petsc_options;        // inserted before KSPSetFromOptions, e.g. "-poisson_pc_type gamg"
   int reuse_preconditioner = 1;     // rebuild the preconditioner every N solves (1 = every solve)
   bool geometric_multigrid = true;  // false: a PETSc preconditioner (options decide which)
+  int pre_sweeps = 2, post_sweeps = 2, coarse_sweeps = 20;  // the V-cycle's smoothing
 };
 
 struct PoissonStats {
