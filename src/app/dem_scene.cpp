@@ -148,13 +148,12 @@ nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolv
       next_checkpoint += checkpoint_interval_;
     }
     if (dem_->steps() % poll_every == 0) {
-      int flags[2] = {stop_requested() ? 1 : 0, (root && wall() - last_progress >= progress_interval_) ? 1 : 0};
-      MPI_Allreduce(MPI_IN_PLACE, flags, 2, MPI_INT, MPI_MAX, comm);
-      if (flags[0]) {
+      const RunPoll poll = poll_run(comm, root, wall(), last_progress, progress_interval_);
+      if (poll.stop) {
         status = "interrupted";
         break;
       }
-      if (flags[1]) {
+      if (poll.progress) {
         last_progress = wall();
         stats = dem_->stats();
         if (root && !opt.quiet) {

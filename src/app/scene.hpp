@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 
+#include "app/signals.hpp"
 #include "core/config.hpp"
 
 namespace tessera {
@@ -28,6 +29,17 @@ class Scene {
   // Runs to the end; returns the summary (also written to DIR/summary.json).
   virtual nlohmann::json run(const RunOptions& options, const nlohmann::json& resolved_case) = 0;
 };
+
+// Collective poll of a run loop, every few steps: has a stop signal (SIGTERM, SIGUSR1) reached any
+// rank, and is a progress line due by rank 0's clock? Every rank gets the same answer.
+struct RunPoll {
+  bool stop = false, progress = false;
+};
+inline RunPoll poll_run(MPI_Comm comm, bool root, double wall_seconds, double last_progress, double interval) {
+  int flags[2] = {stop_requested() ? 1 : 0, (root && wall_seconds - last_progress >= interval) ? 1 : 0};
+  MPI_Allreduce(MPI_IN_PLACE, flags, 2, MPI_INT, MPI_MAX, comm);
+  return {flags[0] != 0, flags[1] != 0};
+}
 
 // Builds the scene the case names (key `scene`).
 std::unique_ptr<Scene> make_scene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir);

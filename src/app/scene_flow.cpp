@@ -273,16 +273,20 @@ nlohmann::json FlowScene::run(const RunOptions& opt, const nlohmann::json& resol
   const auto wall_start = std::chrono::steady_clock::now();
   auto wall = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count(); };
 
-  if (opt.restart)
-    read_flow_checkpoint(*opt.restart, *flow_);
-  else
-    set_initial_state();
+  if (opt.restart) read_flow_checkpoint(*opt.restart, *flow_);
   if (root) {
     fs::create_directories(opt.output_dir);
     if (!opt.resolved_case_yaml.empty())
       write_file_atomically(opt.output_dir + "/case.resolved.yaml", opt.resolved_case_yaml);
   }
   MPI_Barrier(comm);
+  if (!opt.restart) {
+    try {
+      set_initial_state();  // includes the first projection, which can fail like any other
+    } catch (const CollectiveRunError& e) {
+      fail(opt, std::string("initial projection: ") + e.what());
+    }
+  }
   const double volume0 = flow_->liquid_volume();
   const long cells = long(g.cells()[0]) * g.cells()[1] * g.cells()[2];
   if (root && !opt.quiet) {
@@ -366,13 +370,12 @@ nlohmann::json FlowScene::run(const RunOptions& opt, const nlohmann::json& resol
       next_checkpoint = next_after(checkpoint_interval_);
     }
     if (flow_->steps() % 10 == 0) {
-      int flags[2] = {stop_requested() ? 1 : 0, (root && wall() - last_progress >= progress_interval_) ? 1 : 0};
-      MPI_Allreduce(MPI_IN_PLACE, flags, 2, MPI_INT, MPI_MAX, comm);
-      if (flags[0]) {
+      const RunPoll poll = poll_run(comm, root, wall(), last_progress, progress_interval_);
+      if (poll.stop) {
         status = "interrupted";
         break;
       }
-      if (flags[1]) {
+      if (poll.progress) {
         last_progress = wall();
         const double drift = (flow_->liquid_volume() - volume0) / volume0;
         const double vmax = flow_->max_speed();

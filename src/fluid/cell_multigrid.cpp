@@ -4,13 +4,12 @@
 #include <algorithm>
 
 #include "core/errors.hpp"
+#include "fluid/petsc_check.hpp"
 
 namespace tessera {
 namespace {
 
-void check(PetscErrorCode ierr, const char* what) {
-  if (ierr) throw RunError(std::string("PETSc error in ") + what + " (code " + std::to_string(int(ierr)) + ")");
-}
+constexpr auto check = petsc_check;
 
 constexpr long kCoarsestCells = 256;  // stop coarsening below this many cells in all
 

@@ -4,13 +4,12 @@
 #include <algorithm>
 
 #include "core/errors.hpp"
+#include "fluid/petsc_check.hpp"
 
 namespace tessera {
 namespace {
 
-void check(PetscErrorCode ierr, const char* what) {
-  if (ierr) throw RunError(std::string("PETSc error in ") + what + " (code " + std::to_string(int(ierr)) + ")");
-}
+constexpr auto check = petsc_check;
 
 // Cells per process along d: a rank owns the cells whose centres lie in its slab [cut_r, cut_r+1).
 std::vector<PetscInt> ownership(const Decomposition& decomp, int d, int n, double lo, double h) {

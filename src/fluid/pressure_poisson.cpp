@@ -5,13 +5,12 @@
 #include <sstream>
 
 #include "core/errors.hpp"
+#include "fluid/petsc_check.hpp"
 
 namespace tessera {
 namespace {
 
-void check(PetscErrorCode ierr, const char* what) {
-  if (ierr) throw RunError(std::string("PETSc error in ") + what + " (code " + std::to_string(int(ierr)) + ")");
-}
+constexpr auto check = petsc_check;
 
 }  // namespace
 

@@ -111,7 +111,8 @@ TEST(FlowRanks, SameFieldsOnOneTwoFourRanks) {
 TEST(FlowRanks, RestartIsBitwiseAtTheSameRankCount) {
   run_on(2, {}, kDir + "/straight");
   run_on(2, {"run.max_steps=13"}, kDir + "/first");
-  if (world_rank() == 0) fs::copy_file(kDir + "/first/checkpoint.h5", kDir + "/resume.h5", fs::copy_options::overwrite_existing);
+  if (world_rank() == 0)
+    fs::copy_file(kDir + "/first/checkpoint.h5", kDir + "/resume.h5", fs::copy_options::overwrite_existing);
   MPI_Barrier(MPI_COMM_WORLD);
   run_on(2, {}, kDir + "/second", kDir + "/resume.h5");
   run_on(4, {}, kDir + "/second4", kDir + "/resume.h5");

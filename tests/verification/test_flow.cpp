@@ -9,12 +9,13 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
-#include <sstream>
 #include <memory>
+#include <sstream>
 
 #include "app/scene.hpp"
 #include "core/config.hpp"
 #include "core/decomposition.hpp"
+#include "core/errors.hpp"
 #include "fluid/flow_solver.hpp"
 
 using namespace tessera;
@@ -302,8 +303,8 @@ TEST(DropImpact, SeedDropThroughImpactOnFloorAndPool) {
 // 0.099 (256^2) off, Tessera 0.110 and 0.114 (docs/validation.md), the data of the two column
 // widths differ by up to 4 %: 0.13 leaves 2 % of room over Tessera's measured value.
 TEST(DamBreak, MartinMoyceFront) {
-  Config c = Config::load(std::string(TESSERA_SOURCE_DIR) + "/cases/dam_break/martin_moyce.yaml",
-                          {"output.field_interval=0"});
+  Config c =
+      Config::load(std::string(TESSERA_SOURCE_DIR) + "/cases/dam_break/martin_moyce.yaml", {"output.field_interval=0"});
   auto scene = make_scene(c.root(), MPI_COMM_WORLD, ".");
   c.check_unused();
   RunOptions opt;
@@ -344,4 +345,43 @@ TEST(DamBreak, MartinMoyceFront) {
   std::printf("dam break 128^2: mean relative front error %.4f over %d measured points\n", mean, count);
   EXPECT_GE(count, 13);
   EXPECT_LT(mean, 0.13);
+}
+
+// A Poisson solve that cannot reach its tolerance stops the run with the failing state on disk
+// (never a silent step); bad boundary input stops it before anything is written.
+TEST(FlowErrors, PoissonFailureStopsWithDumpAndBadInputIsRefused) {
+  const std::string dir = "flow_poisson_failure";
+  {
+    Config c = Config::load(std::string(TESSERA_SOURCE_DIR) + "/cases/drop_impact/seed_pool.yaml",
+                            {"fluid.cells=[16,16,12]", "fluid.poisson.max_iterations=1", "fluid.poisson.rtol=1e-14",
+                             "output.field_interval=0"});
+    auto scene = make_scene(c.root(), MPI_COMM_WORLD, ".");
+    c.check_unused();
+    RunOptions opt;
+    opt.output_dir = dir;
+    opt.quiet = true;
+    try {
+      scene->run(opt, {});
+      ADD_FAILURE() << "the run went on without a converged pressure";
+    } catch (const CollectiveRunError& e) {
+      EXPECT_NE(std::string(e.what()).find("did not converge"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("failure.h5"), std::string::npos) << e.what();
+    }
+    MPI_Barrier(MPI_COMM_WORLD);
+    EXPECT_TRUE(std::ifstream(dir + "/failure.h5").good());
+  }
+  auto error_of = [](const std::vector<std::string>& sets) -> std::string {
+    try {
+      Config c = Config::load(std::string(TESSERA_SOURCE_DIR) + "/cases/drop_impact/seed_pool.yaml", sets);
+      auto scene = make_scene(c.root(), MPI_COMM_WORLD, ".");
+      c.check_unused();
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(error_of({"fluid.boundaries.x_low=periodic"}).find("periodic on both sides"), std::string::npos);
+  EXPECT_NE(error_of({"fluid.time_step.cfl=0.7"}).find("cfl"), std::string::npos);
+  EXPECT_NE(error_of({"fluid.boundaries.x_low=slippery"}).find("x_low"), std::string::npos);
+  EXPECT_NE(error_of({"initial.liquid=[{cube: {min: [0,0,0], max: [1,1,1]}}]"}).find("box"), std::string::npos);
 }
