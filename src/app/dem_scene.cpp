@@ -25,9 +25,15 @@ DemScene::DemScene(const ConfigNode& root, MPI_Comm comm, const std::string& cas
     const auto g = domain.integers("process_grid", 3, 0, 1 << 20);
     grid = {static_cast<int>(g[0]), static_cast<int>(g[1]), static_cast<int>(g[2])};
   }
+  const ConfigNode solid = root.section("solid");
+  if (const auto plane = solid.optional_section("plane")) {
+    // Plane mode: one process along the normal (the sub-domains tile the plane).
+    const int n = plane->choice("normal", {"x", "y", "z"})[0] - 'x';
+    if (grid[n] > 1) domain.fail("process_grid", std::string("1 along the plane's normal (") + "xyz"[n] + ")");
+    grid[n] = 1;
+  }
   decomp_ = std::make_unique<Decomposition>(comm, lo, hi, grid);
 
-  const ConfigNode solid = root.section("solid");
   ContactModel model(solid);
   Walls walls(solid, model, case_dir);
   dem_ = std::make_unique<DemSolver>(*decomp_, std::move(model), std::move(walls), DemSettings::from_config(solid));

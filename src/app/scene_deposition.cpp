@@ -78,6 +78,7 @@ class DepositionScene final : public DemScene {
       if (region_lo_[k] < lo[k] || region_hi_[k] > hi[k])
         d.fail("region_max", "a region inside domain.box_min .. domain.box_max (grains must start in the box)");
       counts_[k] = static_cast<long>(std::floor((region_hi_[k] - region_lo_[k]) / spacing_[k]));
+      if (dem_->plane_mode() && k == dem_->plane_normal()) counts_[k] = 1;  // one layer, put in the plane
       if (counts_[k] < 1) d.fail("region_max", "a region at least one lattice spacing wide");
     }
     if (counts_[0] * counts_[1] * counts_[2] > kMaxBodyId)
@@ -143,15 +144,21 @@ class DepositionScene final : public DemScene {
     MPI_Allreduce(MPI_IN_PLACE, &z_floor, 1, MPI_DOUBLE, MPI_MIN, comm);
     const Vec3 lo = decomp_->global_lo(), hi = decomp_->global_hi();
     const double d = diameter_, z0 = z_floor + 2 * d, z1 = z_top - 3 * d;
-    const double ax = (hi.x - lo.x) - 4 * d, ay = (hi.y - lo.y) - 4 * d;
+    // Plane mode: an area fraction of discs (the normal's extent and margins do not count).
+    const int normal = dem_->plane_normal();
+    const double ax = normal == 0 ? 1.0 : (hi.x - lo.x) - 4 * d, ay = normal == 1 ? 1.0 : (hi.y - lo.y) - 4 * d;
+    const double mx = normal == 0 ? -1e300 : 2 * d, my = normal == 1 ? -1e300 : 2 * d;
     double solid = 0, weight = 0;
     for (std::size_t i = 0; i < p.owned; ++i) {
       const Vec3 x = p.pos(i);
       weight += p.mass[i];
-      if (x.x < lo.x + 2 * d || x.x > hi.x - 2 * d || x.y < lo.y + 2 * d || x.y > hi.y - 2 * d) continue;
+      if (x.x < lo.x + mx || x.x > hi.x - mx || x.y < lo.y + my || x.y > hi.y - my) continue;
       if (x.z < z0 || x.z >= z1) continue;
-      solid += p.shape[i] > 0 ? p.mass[i] / dem_->model().materials()[p.material[i]].density
-                              : 4.0 / 3.0 * std::numbers::pi * std::pow(p.radius[i], 3);
+      if (normal >= 0)
+        solid += std::numbers::pi * p.radius[i] * p.radius[i];
+      else
+        solid += p.shape[i] > 0 ? p.mass[i] / dem_->model().materials()[p.material[i]].density
+                                : 4.0 / 3.0 * std::numbers::pi * std::pow(p.radius[i], 3);
     }
     double sums[2] = {solid, weight};
     MPI_Allreduce(MPI_IN_PLACE, sums, 2, MPI_DOUBLE, MPI_SUM, comm);

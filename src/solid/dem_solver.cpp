@@ -29,6 +29,14 @@ DemSettings DemSettings::from_config(const ConfigNode& solid) {
     s.skin = solid.real("neighbor_skin", Dim::length, Range::positive());
   else
     solid.real("neighbor_skin", Dim::length, Range::positive(), 0.0);  // 0 = auto (0.5 r_min)
+  if (const auto plane = solid.optional_section("plane")) {
+    const std::string n = plane->choice("normal", {"x", "y", "z"});
+    s.plane_normal = n[0] - 'x';
+    s.plane_thickness = plane->real("thickness", Dim::length, Range::positive());
+    if (plane->has("position")) s.plane_position = plane->real("position", Dim::length, Range::any());
+    if (s.gravity[s.plane_normal] != 0)
+      solid.fail("gravity", std::string("no component along the plane's normal (") + n + ") in plane mode");
+  }
   return s;
 }
 
@@ -36,13 +44,41 @@ DemSolver::DemSolver(const Decomposition& decomp, ContactModel model, Walls wall
     : decomp_(decomp), model_(std::move(model)), walls_(std::move(walls)), settings_(settings), halo_(decomp) {
   p_.wall_slots = walls_.slots();
   wall_force_.assign(walls_.slots(), Vec3{});
+  if (plane_mode()) {
+    const int n = settings_.plane_normal;
+    if (decomp.dims()[n] != 1)
+      throw InputError("domain.process_grid", "",
+                       std::string("one process along the plane's normal (") + "xyz"[n] + ") in plane mode");
+    plane_position_ = settings_.plane_position.value_or(0.5 * (decomp.global_lo()[n] + decomp.global_hi()[n]));
+    if (plane_position_ < decomp.global_lo()[n] || plane_position_ > decomp.global_hi()[n])
+      throw InputError("solid.plane.position", std::to_string(plane_position_), "a position inside the domain");
+    // Plane motion (T15): velocity in the plane, rotation about the normal only.
+    for (int k = 0; k < 3; ++k) {
+      velocity_mask_[k] = k == n ? 0.0 : 1.0;
+      spin_mask_[k] = k == n ? 1.0 : 0.0;
+    }
+  }
 }
 
 void DemSolver::add_sphere(std::int64_t id, int material, double radius, const Vec3& x, const Vec3& v,
                            const Vec3& omega, double density) {
   if (id < 0 || id > kMaxBodyId) throw InputError("body id", std::to_string(id), "an id in [0, 2^32)");
-  if (!decomp_.owns(x)) return;
   const double rho = density > 0 ? density : model_.materials()[material].density;
+  if (plane_mode()) {
+    // A disc of the plane's thickness, in the plane, moving in it (T15).
+    Vec3 xp = x, vp = v, wp = omega;
+    const int n = settings_.plane_normal;
+    xp[n] = plane_position_;
+    vp[n] = 0;
+    for (int k = 0; k < 3; ++k)
+      if (k != n) wp[k] = 0;
+    if (!decomp_.owns(xp)) return;
+    const double m = rho * std::numbers::pi * radius * radius * settings_.plane_thickness;
+    p_.push_back(id, material, radius, m, 0.5 * m * radius * radius, xp, vp, wp);
+    p_.owned = p_.size();
+    return;
+  }
+  if (!decomp_.owns(x)) return;
   const double m = rho * 4.0 / 3.0 * std::numbers::pi * radius * radius * radius;
   p_.push_back(id, material, radius, m, 0.4 * m * radius * radius, x, v, omega);
   p_.owned = p_.size();
@@ -78,6 +114,8 @@ void DemSolver::add_body(std::int64_t id, int material, int shape, const Vec3& x
   if (shape < 1 || shape > std::ssize(shapes_))
     throw InputError("body shape", std::to_string(shape),
                      "a shape template index in [1, " + std::to_string(shapes_.size()) + "]");
+  if (plane_mode())
+    throw InputError("solid.plane", "", "sphere bodies (discs) only: shaped bodies are not available in plane mode");
   if (!decomp_.owns(x)) return;
   const ShapeTemplate& t = shapes_[shape - 1];
   const double rho = density > 0 ? density : model_.materials()[material].density;
@@ -695,6 +733,8 @@ void DemSolver::integrate_first() {
   const double* __restrict inv_m = inv_mass_.data();
   const double* __restrict inv_i = inv_inertia_.data();
   const std::size_t n = p_.owned;
+  const double* vmask = velocity_mask_.data();  // all ones in 3D; plane mode zeroes the normal
+  const double* wmask = spin_mask_.data();      // components (multiplying by 1 keeps every bit)
   // The contact kernel reads the owned bodies from its mirrors: they are written here, from
   // registers (a rebuild reorders the bodies and repacks everything).
   owned_mirrors_current_ = !shaped() && k_geometry_.size() >= n && k_motion_.size() >= n;
@@ -704,8 +744,8 @@ void DemSolver::integrate_first() {
     const double a = inv_m[i], b = inv_i[i];
     double vi[3], wi[3], xi[3];
     for (int k = 0; k < 3; ++k) {
-      vi[k] = v[3 * i + k] + h * (f[3 * i + k] * a + g[k]);
-      wi[k] = w[3 * i + k] + h * t[3 * i + k] * b;
+      vi[k] = (v[3 * i + k] + h * (f[3 * i + k] * a + g[k])) * vmask[k];
+      wi[k] = (w[3 * i + k] + h * t[3 * i + k] * b) * wmask[k];
       xi[k] = x[3 * i + k] + dt * vi[k];
     }
     for (int k = 0; k < 3; ++k) v[3 * i + k] = vi[k], w[3 * i + k] = wi[k], x[3 * i + k] = xi[k];
@@ -745,12 +785,14 @@ void DemSolver::integrate_second() {
   const double* __restrict inv_m = inv_mass_.data();
   const double* __restrict inv_i = inv_inertia_.data();
   const std::size_t n = p_.owned;
+  const double* vmask = velocity_mask_.data();
+  const double* wmask = spin_mask_.data();
   for (std::size_t i = 0; i < n; ++i) {
     const double fi[3] = {in[i].fx, in[i].fy, in[i].fz}, ti[3] = {in[i].tx, in[i].ty, in[i].tz};
     double vi[3], wi[3];  // loads before stores (see integrate_first)
     for (int k = 0; k < 3; ++k) {
-      vi[k] = v[3 * i + k] + h * (fi[k] * inv_m[i] + g[k]);
-      wi[k] = w[3 * i + k] + h * ti[k] * inv_i[i];
+      vi[k] = (v[3 * i + k] + h * (fi[k] * inv_m[i] + g[k])) * vmask[k];
+      wi[k] = (w[3 * i + k] + h * ti[k] * inv_i[i]) * wmask[k];
     }
     for (int k = 0; k < 3; ++k) f[3 * i + k] = fi[k], t[3 * i + k] = ti[k], v[3 * i + k] = vi[k], w[3 * i + k] = wi[k];
   }

@@ -47,6 +47,11 @@ struct DemSettings {
   double steps_per_contact = 30;    // dt = t_contact / steps_per_contact when automatic
   double impact_velocity = 1.0;     // reference speed for the Hertz contact duration
   std::optional<double> skin;       // none: 0.5 r_min
+  // Plane (2D) mode (T15): bodies are discs of `plane_thickness` moving in the plane through
+  // `plane_position` normal to axis `plane_normal` (-1: 3D), turning about that axis only.
+  int plane_normal = -1;
+  double plane_thickness = 0;
+  std::optional<double> plane_position;  // none: the middle of the domain along the normal
 
   static DemSettings from_config(const ConfigNode& solid);
 };
@@ -103,6 +108,9 @@ class DemSolver {
   void set_clock(double time, long steps) { time_ = time, steps_ = steps; }
   double skin() const { return skin_; }
   const Vec3& gravity() const { return settings_.gravity; }
+  bool plane_mode() const { return settings_.plane_normal >= 0; }
+  int plane_normal() const { return settings_.plane_normal; }
+  double plane_thickness() const { return settings_.plane_thickness; }
   double contact_duration() const { return t_contact_; }
 
   DemStats stats() const;  // collective
@@ -149,6 +157,8 @@ class DemSolver {
   ContactModel model_;
   Walls walls_;
   DemSettings settings_;
+  double plane_position_ = 0;
+  std::array<double, 3> velocity_mask_{1, 1, 1}, spin_mask_{1, 1, 1};
   ParticleStore p_;
   NeighborList list_;
   Halo halo_;
