@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "core/errors.hpp"
+#include "solid/club_head.hpp"
 #include "solid/gmsh_reader.hpp"
 #include "solid/stl_reader.hpp"
 
@@ -33,18 +34,35 @@ MeshWall read_mesh_wall(const ConfigNode& w, int material, const std::string& ca
   MeshWall m;
   m.key = w.path();
   m.material = material;
-  std::filesystem::path path = w.text("file");
-  if (path.is_relative()) path = std::filesystem::path(case_dir) / path;
-  const double scale = w.real("scale", Dim::none, Range::positive(), 1.0);
   TetMesh mesh;
-  const std::string ext = path.extension().string();
-  if (ext == ".stl" || ext == ".STL") {
-    mesh = read_stl(path.string(), scale);
-  } else if (ext == ".msh") {
-    mesh = read_gmsh(path.string());
-    for (auto& p : mesh.nodes) p = p * scale;
+  if (w.has("club") == w.has("file")) w.fail("file", "either a mesh file or a generated club: {...}, not both");
+  if (const auto club = w.optional_section("club")) {
+    // The bunker-shot seed's club head (club_head.hpp), its leading edge at `leading_edge`, the
+    // side surface extruded over `width` along y.
+    ClubHeadDesign d;
+    d.face_length = club->real("face_length", Dim::length, Range::positive(), d.face_length);
+    d.loft_deg = club->real("loft_deg", Dim::none, Range::half_open(0, 90), d.loft_deg);
+    d.bounce_deg = club->real("bounce_deg", Dim::none, Range::half_open(0, 45), d.bounce_deg);
+    d.sole_width = club->real("sole_width", Dim::length, Range::positive(), d.sole_width);
+    d.sole_camber = club->real("sole_camber", Dim::length, Range::non_negative(), d.sole_camber);
+    const Vec3 edge = club->vec3("leading_edge", Dim::length);
+    const double width = club->real("width", Dim::length, Range::positive());
+    std::vector<Vec3> nodes;
+    extrude_outline(club_head_outline(d), edge.y, width, nodes, mesh.triangles);
+    for (const auto& p : nodes) mesh.nodes.push_back({p.x + edge.x, p.y, p.z + edge.z});
   } else {
-    w.fail("file", "an STL (.stl) or Gmsh (.msh) surface mesh");
+    std::filesystem::path path = w.text("file");
+    if (path.is_relative()) path = std::filesystem::path(case_dir) / path;
+    const double scale = w.real("scale", Dim::none, Range::positive(), 1.0);
+    const std::string ext = path.extension().string();
+    if (ext == ".stl" || ext == ".STL") {
+      mesh = read_stl(path.string(), scale);
+    } else if (ext == ".msh") {
+      mesh = read_gmsh(path.string());
+      for (auto& p : mesh.nodes) p = p * scale;
+    } else {
+      w.fail("file", "an STL (.stl) or Gmsh (.msh) surface mesh");
+    }
   }
   if (mesh.triangles.empty()) w.fail("file", "a mesh with triangles");
   m.triangles = mesh.triangles;

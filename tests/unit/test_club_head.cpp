@@ -6,7 +6,10 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/config.hpp"
 #include "solid/club_head.hpp"
+#include "solid/contact_model.hpp"
+#include "solid/walls.hpp"
 
 using namespace tessera;
 
@@ -67,4 +70,40 @@ TEST(ClubHead, ExtrudedSurfaceNormalsPointOut) {
     EXPECT_GT(dot(n, (a + b + e) / 3.0 - c), 0);
     EXPECT_NEAR(n.y, 0.0, 1e-18);
   }
+}
+
+// A mesh wall `club: {...}` in a case file is that outline, extruded, with its leading edge where
+// the case puts it.
+TEST(ClubHead, MeshWallFromTheCaseFile) {
+  const char* yaml = R"(
+solid:
+  materials: {sand: {density: 2480}, club: {density: 7800}}
+  contact:
+    law: hooke
+    pairs: [{materials: [sand, club], normal_stiffness: 1e4, tangential_stiffness: 2e3, normal_damping_rate: 0, tangential_damping_rate: 0, friction: 0.2}]
+  walls:
+    - type: mesh
+      material: club
+      club: {loft_deg: 60, bounce_deg: 13, leading_edge: [0.1, 0.0003, 0.05], width: 0.0012}
+      motion: {type: pivot, pivot: [0.1, 0.0003, 0.75], axis: [0, -1, 0], moment_of_inertia: 0.01}
+)";
+  Config c = Config::parse(yaml);
+  const ConfigNode solid = c.root().section("solid");
+  ContactModel model(solid);
+  Walls walls(solid, model, ".");
+  ASSERT_EQ(walls.meshes().size(), 1u);
+  const MeshWall& m = walls.meshes()[0];
+  ClubHeadDesign d;
+  d.loft_deg = 60;
+  d.bounce_deg = 13;
+  const auto o = club_head_outline(d);
+  ASSERT_EQ(m.triangles.size(), 2 * o.size());
+  ASSERT_EQ(m.local.size(), 2 * o.size());
+  for (std::size_t i = 0; i < o.size(); ++i) {
+    const Vec3 p = m.origin + m.local[2 * i];  // the y- node of outline point i, at theta = 0
+    EXPECT_NEAR(p.x, 0.1 + o[i][0], 1e-15);
+    EXPECT_NEAR(p.y, 0.0003 - 0.0006, 1e-15);
+    EXPECT_NEAR(p.z, 0.05 + o[i][1], 1e-15);
+  }
+  EXPECT_EQ(m.motion, MeshWall::Motion::pivot);
 }
