@@ -16,23 +16,16 @@ namespace tessera {
 namespace fs = std::filesystem;
 
 DemScene::DemScene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir) : case_dir_(case_dir) {
-  const ConfigNode domain = root.section("domain");
-  const Vec3 lo = domain.vec3("box_min", Dim::length), hi = domain.vec3("box_max", Dim::length);
-  for (int d = 0; d < 3; ++d)
-    if (!(hi[d] > lo[d])) domain.fail("box_max", "larger than box_min in every direction");
-  std::array<int, 3> grid{0, 0, 0};
-  if (domain.has("process_grid")) {
-    const auto g = domain.integers("process_grid", 3, 0, 1 << 20);
-    grid = {static_cast<int>(g[0]), static_cast<int>(g[1]), static_cast<int>(g[2])};
-  }
+  DomainSpec domain = read_domain(root);
   const ConfigNode solid = root.section("solid");
   if (const auto plane = solid.optional_section("plane")) {
     // Plane mode: one process along the normal (the sub-domains tile the plane).
     const int n = plane->choice("normal", {"x", "y", "z"})[0] - 'x';
-    if (grid[n] > 1) domain.fail("process_grid", std::string("1 along the plane's normal (") + "xyz"[n] + ")");
-    grid[n] = 1;
+    if (domain.grid[n] > 1)
+      root.section("domain").fail("process_grid", std::string("1 along the plane's normal (") + "xyz"[n] + ")");
+    domain.grid[n] = 1;
   }
-  decomp_ = std::make_unique<Decomposition>(comm, lo, hi, grid);
+  decomp_ = std::make_unique<Decomposition>(comm, domain.lo, domain.hi, domain.grid);
 
   ContactModel model(solid);
   Walls walls(solid, model, case_dir);

@@ -5,6 +5,7 @@
 #pragma once
 #include <mpi.h>
 
+#include <array>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -12,6 +13,7 @@
 
 #include "app/signals.hpp"
 #include "core/config.hpp"
+#include "core/vec3.hpp"
 
 namespace tessera {
 
@@ -29,6 +31,25 @@ class Scene {
   // Runs to the end; returns the summary (also written to DIR/summary.json).
   virtual nlohmann::json run(const RunOptions& options, const nlohmann::json& resolved_case) = 0;
 };
+
+// The case's `domain` section: box_min, box_max (checked), process_grid (0 = the grid chooses).
+struct DomainSpec {
+  Vec3 lo, hi;
+  std::array<int, 3> grid{0, 0, 0};
+};
+inline DomainSpec read_domain(const ConfigNode& root) {
+  const ConfigNode domain = root.section("domain");
+  DomainSpec s;
+  s.lo = domain.vec3("box_min", Dim::length);
+  s.hi = domain.vec3("box_max", Dim::length);
+  for (int d = 0; d < 3; ++d)
+    if (!(s.hi[d] > s.lo[d])) domain.fail("box_max", "larger than box_min in every direction");
+  if (domain.has("process_grid")) {
+    const auto g = domain.integers("process_grid", 3, 0, 1 << 20);
+    s.grid = {int(g[0]), int(g[1]), int(g[2])};
+  }
+  return s;
+}
 
 // Collective poll of a run loop, every few steps: has a stop signal (SIGTERM, SIGUSR1) reached any
 // rank, and is a progress line due by rank 0's clock? Every rank gets the same answer.

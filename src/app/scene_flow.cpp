@@ -150,16 +150,8 @@ class FlowScene final : public Scene {
  public:
   FlowScene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir) {
     (void)case_dir;
-    const ConfigNode domain = root.section("domain");
-    const Vec3 lo = domain.vec3("box_min", Dim::length), hi = domain.vec3("box_max", Dim::length);
-    for (int d = 0; d < 3; ++d)
-      if (!(hi[d] > lo[d])) domain.fail("box_max", "larger than box_min in every direction");
-    std::array<int, 3> grid{0, 0, 0};
-    if (domain.has("process_grid")) {
-      const auto g = domain.integers("process_grid", 3, 0, 1 << 20);
-      grid = {int(g[0]), int(g[1]), int(g[2])};
-    }
-    decomp_ = std::make_unique<Decomposition>(comm, lo, hi, grid);
+    const DomainSpec domain = read_domain(root);
+    decomp_ = std::make_unique<Decomposition>(comm, domain.lo, domain.hi, domain.grid);
     flow_ = std::make_unique<FlowSolver>(*decomp_, read_flow_settings(root.section("fluid")));
 
     if (const auto init = root.optional_section("initial")) {
