@@ -42,10 +42,14 @@ class DepositionScene final : public DemScene {
       diameter_ = 2 * shapes[shape_ - 1].bounding_radius;  // the lattice must clear any orientation
     } else {
       diameter_ = d.real("diameter", Dim::length, Range::positive());
+      // Sizes uniform in diameter (1 +- spread): a spread breaks the crystalline patches that equal
+      // discs or spheres form; each grain's size comes from (seed, id), the same on any rank count.
+      spread_ = d.real("diameter_spread", Dim::none, Range::half_open(0, 1), 0.0);
     }
     // Extent of a grain along each axis: any orientation needs the bounding diameter; aligned
     // shaped grains (body frame = world frame) need their contact spheres' extent.
-    Vec3 extent{diameter_, diameter_, diameter_};
+    const double largest = diameter_ * (1 + spread_);
+    Vec3 extent{largest, largest, largest};
     if (shape_ > 0) {
       aligned_ = d.choice("orientation", {"random", "aligned"}, "random") == "aligned";
       if (aligned_) {
@@ -95,7 +99,6 @@ class DepositionScene final : public DemScene {
  protected:
   void create_bodies() override {
     std::int64_t id = 1;
-    const double r = 0.5 * diameter_;
     for (long k = 0; k < counts_[2]; ++k)
       for (long j = 0; j < counts_[1]; ++j)
         for (long i = 0; i < counts_[0] && id <= max_grains_; ++i, ++id) {
@@ -103,6 +106,7 @@ class DepositionScene final : public DemScene {
                  region_lo_.z + (k + 0.5) * spacing_.z};
           for (int c = 0; c < 3; ++c) x[c] += jitter_ * (2 * unit_random(seed_, id, c) - 1);
           if (shape_ == 0) {
+            const double r = 0.5 * diameter_ * (1 + spread_ * (2 * unit_random(seed_, id, 6) - 1));
             dem_->add_sphere(id, material_, r, x, {});
             continue;
           }
@@ -189,7 +193,7 @@ class DepositionScene final : public DemScene {
   Vec3 spacing_;
   bool aligned_ = false;
   long max_grains_ = 0;
-  double diameter_ = 0, jitter_ = 0, settled_energy_ = 0, min_time_ = 0, settle_time_ = 0;
+  double diameter_ = 0, spread_ = 0, jitter_ = 0, settled_energy_ = 0, min_time_ = 0, settle_time_ = 0;
   std::uint64_t seed_ = 0;
   Vec3 region_lo_, region_hi_;
   long counts_[3] = {0, 0, 0};

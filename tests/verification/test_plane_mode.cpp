@@ -92,8 +92,9 @@ solid:
 deposition:
   material: sand
   diameter: 0.6 mm
+  diameter_spread: 0.05
   lattice_spacing: 0.7 mm
-  jitter: 0.04 mm
+  jitter: 0.03 mm
   seed: 11
   region_min: [0, 0, 0]
   region_max: [12 mm, 0.6 mm, 16 mm]
@@ -109,17 +110,23 @@ run: {end_time: 0.02 s}
     EXPECT_EQ(count_differences(one, four, "4 ranks (2x1x2)"), 0);
     // Packed state (ParticleStore::pack): id, material, shape, radius, mass, inertia, x[3], v[3],
     // omega[3], ...: y at the plane, no velocity along y, spin about y only; disc mass and inertia.
-    double z_max = 0;
+    double z_max = 0, r_min = 1, r_max = 0;
     for (const auto& [id, s] : one) {
+      const double r = s[3];
       EXPECT_EQ(s[7], 0.3e-3) << id;
       EXPECT_EQ(s[10], 0.0) << id;
       EXPECT_EQ(s[12], 0.0) << id;
       EXPECT_EQ(s[14], 0.0) << id;
-      EXPECT_DOUBLE_EQ(s[4], 2480 * std::numbers::pi * 0.3e-3 * 0.3e-3 * 0.6e-3);
-      EXPECT_DOUBLE_EQ(s[5], 0.5 * s[4] * 0.3e-3 * 0.3e-3);
+      EXPECT_DOUBLE_EQ(s[4], 2480 * std::numbers::pi * r * r * 0.6e-3);
+      EXPECT_DOUBLE_EQ(s[5], 0.5 * s[4] * r * r);
       z_max = std::max(z_max, s[8]);
+      r_min = std::min(r_min, r), r_max = std::max(r_max, r);
     }
     EXPECT_LT(z_max, 15e-3);  // the discs have fallen
+    // diameter_spread 0.05: radii uniform in 0.3 mm (1 +- 0.05), spanning most of it.
+    EXPECT_GE(r_min, 0.285e-3);
+    EXPECT_LE(r_max, 0.315e-3);
+    EXPECT_GT(r_max - r_min, 0.025e-3);
   }
 }
 
