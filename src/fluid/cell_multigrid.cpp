@@ -87,10 +87,12 @@ CellMultigrid::~CellMultigrid() {
 
 void CellMultigrid::exchange(Level& L, std::vector<double>& v) {
   if (!L.needs_exchange) return;
+  const double start = MPI_Wtime();
   check(VecPlaceArray(L.scratch, v.data()), "VecPlaceArray");
   check(DMLocalToLocalBegin(L.dm, L.scratch, INSERT_VALUES, L.scratch), "DMLocalToLocalBegin");
   check(DMLocalToLocalEnd(L.dm, L.scratch, INSERT_VALUES, L.scratch), "DMLocalToLocalEnd");
   check(VecResetArray(L.scratch), "VecResetArray");
+  exchange_seconds_ += MPI_Wtime() - start;
 }
 
 void CellMultigrid::set_coefficients(const std::vector<double>& rho, bool coarse) {

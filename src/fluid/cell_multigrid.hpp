@@ -42,6 +42,7 @@ class CellMultigrid {
   // coefficients pressure_poisson.cpp assembles for PETSc preconditioners).
   void apply_operator(Vec x, Vec y);
   int levels() const { return int(levels_.size()); }
+  double exchange_seconds() const { return exchange_seconds_; }  // ghost exchanges, all levels
 
  private:
   struct Level {
@@ -64,6 +65,7 @@ class CellMultigrid {
 
   const FluidGrid& grid_;
   int pre_, post_, coarse_;
+  double exchange_seconds_ = 0;
   std::vector<std::unique_ptr<Level>> levels_;
 };
 

@@ -85,12 +85,15 @@ class FluidGrid {
   double reduce_sum(double local) const;  // deterministic, rank-ordered
   double reduce_max(double local) const;
   double reduce_min(double local) const;
+  // Wall seconds spent in exchange() so far (communication, inside the phases that call it).
+  double exchange_seconds() const { return exchange_seconds_; }
 
  private:
   MPI_Comm comm_ = MPI_COMM_NULL;
   int rank_ = 0, size_ = 1;
   DM da_ = nullptr, dap_ = nullptr;
   mutable Vec scratch_ = nullptr;
+  mutable double exchange_seconds_ = 0;
   std::array<int, 3> n_{}, s_{}, m_{}, gs_{}, gm_{};
   std::array<std::ptrdiff_t, 3> stride_{};
   std::array<double, 3> h_{};

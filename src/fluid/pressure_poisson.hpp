@@ -57,6 +57,7 @@ class PressurePoisson {
   PoissonStats solve(const std::vector<double>& rhs, std::vector<double>& p);
   bool singular() const { return singular_; }
   std::string description() const;  // KSP and PC types, for the log
+  double exchange_seconds() const { return multigrid_ ? multigrid_->exchange_seconds() : 0.0; }
 
  private:
   const FluidGrid& grid_;
