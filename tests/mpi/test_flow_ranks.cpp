@@ -11,11 +11,11 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "app/scene.hpp"
-#include "core/config.hpp"
 #include "core/h5_file.hpp"
+#include "support/scene_runs.hpp"
 
 using namespace tessera;
+using tessera::test::world_rank;
 namespace fs = std::filesystem;
 
 namespace {
@@ -36,33 +36,10 @@ initial:
 run: {end_time: 1 s, max_steps: 30}
 )";
 
-int world_rank() {
-  int r = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &r);
-  return r;
-}
-
 // Runs the case on the first `ranks` ranks of the world; returns the summary on those ranks.
 nlohmann::json run_on(int ranks, const std::vector<std::string>& sets, const std::string& dir,
                       std::optional<std::string> restart = {}) {
-  MPI_Comm sub = MPI_COMM_NULL;
-  MPI_Comm_split(MPI_COMM_WORLD, world_rank() < ranks ? 0 : MPI_UNDEFINED, world_rank(), &sub);
-  nlohmann::json s;
-  if (sub != MPI_COMM_NULL) {
-    {
-      Config c = Config::parse(kCase, sets);
-      auto scene = make_scene(c.root(), sub, ".");
-      c.check_unused();
-      RunOptions opt;
-      opt.output_dir = dir;
-      opt.quiet = true;
-      opt.restart = restart;
-      s = scene->run(opt, {});
-    }
-    MPI_Comm_free(&sub);
-  }
-  MPI_Barrier(MPI_COMM_WORLD);
-  return s;
+  return test::run_case_on(ranks, kCase, sets, dir, restart);
 }
 
 struct Fields {

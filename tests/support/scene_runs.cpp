@@ -21,45 +21,53 @@ int world_size() {
   return s;
 }
 
-BodyStates run_scene_on(int ranks, const std::string& yaml, const std::vector<std::string>& sets,
-                        const std::string& output_dir, std::optional<std::string> restart) {
-  int world_rank = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &world_rank);
+nlohmann::json run_case_on(int ranks, const std::string& yaml, const std::vector<std::string>& sets,
+                           const std::string& output_dir, std::optional<std::string> restart,
+                           const std::function<void(Scene&, MPI_Comm)>& after) {
   MPI_Comm sub = MPI_COMM_NULL;
-  MPI_Comm_split(MPI_COMM_WORLD, world_rank < ranks ? 0 : MPI_UNDEFINED, world_rank, &sub);
-  BodyStates states;
+  MPI_Comm_split(MPI_COMM_WORLD, world_rank() < ranks ? 0 : MPI_UNDEFINED, world_rank(), &sub);
+  nlohmann::json summary;
   if (sub != MPI_COMM_NULL) {
     {
       Config c = Config::parse(yaml, sets);
-      auto scene = make_dem_scene(c.root(), sub, ".");
+      auto scene = make_scene(c.root(), sub, ".");
       c.check_unused();
       RunOptions opt;
       opt.output_dir = output_dir;
       opt.quiet = true;
       opt.restart = restart;
-      if (world_rank == 0) std::filesystem::create_directories(output_dir);
+      if (world_rank() == 0) std::filesystem::create_directories(output_dir);
       MPI_Barrier(sub);
-      scene->run(opt, {});
-      const ParticleStore& p = scene->dem().particles();
-      std::vector<double> mine;
-      for (std::size_t i = 0; i < p.owned; ++i) p.pack(i, mine);
-      const int stride = p.packed_size();
-      int n = static_cast<int>(mine.size()), size = 1;
-      MPI_Comm_size(sub, &size);
-      std::vector<int> counts(size), displs(size, 0);
-      MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, sub);
-      std::vector<double> all;
-      if (world_rank == 0) {
-        for (int r = 1; r < size; ++r) displs[r] = displs[r - 1] + counts[r - 1];
-        all.resize(displs[size - 1] + counts[size - 1]);
-      }
-      MPI_Gatherv(mine.data(), n, MPI_DOUBLE, all.data(), counts.data(), displs.data(), MPI_DOUBLE, 0, sub);
-      for (std::size_t off = 0; off < all.size(); off += stride)
-        states[static_cast<long>(all[off])] = std::vector<double>(all.begin() + off, all.begin() + off + stride);
+      summary = scene->run(opt, {});
+      if (after) after(*scene, sub);
     }
     MPI_Comm_free(&sub);
   }
   MPI_Barrier(MPI_COMM_WORLD);
+  return summary;
+}
+
+BodyStates run_scene_on(int ranks, const std::string& yaml, const std::vector<std::string>& sets,
+                        const std::string& output_dir, std::optional<std::string> restart) {
+  BodyStates states;
+  run_case_on(ranks, yaml, sets, output_dir, restart, [&](Scene& scene, MPI_Comm sub) {
+    const ParticleStore& p = dynamic_cast<DemScene&>(scene).dem().particles();
+    std::vector<double> mine;
+    for (std::size_t i = 0; i < p.owned; ++i) p.pack(i, mine);
+    const int stride = p.packed_size();
+    int n = static_cast<int>(mine.size()), size = 1;
+    MPI_Comm_size(sub, &size);
+    std::vector<int> counts(size), displs(size, 0);
+    MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, sub);
+    std::vector<double> all;
+    if (world_rank() == 0) {
+      for (int r = 1; r < size; ++r) displs[r] = displs[r - 1] + counts[r - 1];
+      all.resize(displs[size - 1] + counts[size - 1]);
+    }
+    MPI_Gatherv(mine.data(), n, MPI_DOUBLE, all.data(), counts.data(), displs.data(), MPI_DOUBLE, 0, sub);
+    for (std::size_t off = 0; off < all.size(); off += stride)
+      states[static_cast<long>(all[off])] = std::vector<double>(all.begin() + off, all.begin() + off + stride);
+  });
   return states;
 }
 

@@ -5,10 +5,13 @@
 #include <mpi.h>
 
 #include <array>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include "app/scene.hpp"
 
 namespace tessera::test {
 
@@ -18,7 +21,14 @@ int world_size();
 // Full packed state (ParticleStore::pack) of every body, by id; filled on world rank 0 only.
 using BodyStates = std::map<long, std::vector<double>>;
 
-// Runs the case text with overrides on the first `ranks` ranks of MPI_COMM_WORLD.
+// Runs any scene from case text with overrides on the first `ranks` ranks of MPI_COMM_WORLD
+// (quiet, into output_dir); `after` sees the finished scene on those ranks. Returns the summary
+// there (empty elsewhere); every world rank must call it.
+nlohmann::json run_case_on(int ranks, const std::string& yaml, const std::vector<std::string>& sets,
+                           const std::string& output_dir, std::optional<std::string> restart = std::nullopt,
+                           const std::function<void(Scene&, MPI_Comm)>& after = {});
+
+// Runs a dry scene the same way and gathers its final body states.
 BodyStates run_scene_on(int ranks, const std::string& yaml, const std::vector<std::string>& sets,
                         const std::string& output_dir, std::optional<std::string> restart = std::nullopt);
 
