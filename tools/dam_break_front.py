@@ -5,6 +5,7 @@ Usage: dam_break_front.py RUN_DIR [--a 0.146] [--g 9.81] [--png FILE] [--label N
 Reads RUN_DIR/series.csv (time, front_position), forms T = t sqrt(2g/a) and Z = x/a, interpolates
 Z(T) at the reference's T values and prints the table and the mean and maximum |dZ|/Z_ref.
 Reference points whose Z is beyond the tank (Z > 4 - 0.1) are left out: the 4a tank stops the front.
+--also DIR:LABEL: another Tessera run (e.g. with the wall law) on the same plot.
 --foam FILE: a front_position.py output (t T Z rows) of interFoam, put on the same plot and table.
 Prints, last: `front_error_mean: X` (mean relative error over the points compared)."""
 import argparse, csv, math, os, sys
@@ -72,6 +73,8 @@ def main():
     ap.add_argument('--png')
     ap.add_argument('--label', default='Tessera')
     ap.add_argument('--foam')
+    ap.add_argument('--also', action='append', default=[], metavar='RUN_DIR:LABEL',
+                    help='another Tessera run on the plot, with its mean error (repeatable)')
     ap.add_argument('--reference', default=REF)
     args = ap.parse_args()
     ref = reference(args.reference)
@@ -90,6 +93,14 @@ def main():
     print('max relative error %.3f over %d points' % (max(x[3] for x in e), len(e)))
     if ef:
         print('interFoam: mean relative error %.3f, max %.3f' % (sum(x[3] for x in ef) / len(ef), max(x[3] for x in ef)))
+    also = []
+    for spec in args.also:
+        d, _, label = spec.partition(':')
+        TA, ZA = load_run(d, args.a, args.g)
+        ea = errors(TA, ZA, ref)
+        print('%s: mean relative error %.3f, max %.3f' % (label or d, sum(x[3] for x in ea) / len(ea),
+                                                          max(x[3] for x in ea)))
+        also.append((TA, ZA, label or d))
     if args.png:
         import matplotlib
         matplotlib.use('Agg')
@@ -97,6 +108,8 @@ def main():
         fig, ax = plt.subplots(figsize=(5.5, 4))
         ax.plot([r[0] for r in ref], [r[1] for r in ref], 'ko', label='Martin & Moyce (1952)')
         ax.plot(T, Z, '-', label=args.label)
+        for TA, ZA, label in also:
+            ax.plot(TA, ZA, '-.', label=label)
         if foam:
             ax.plot(foam[0], foam[1], '--', label='interFoam')
         ax.set_xlabel('T = t sqrt(2g/a)')

@@ -120,6 +120,9 @@ FlowSettings read_flow_settings(const ConfigNode& fluid) {
         b->fail(names[d][1], std::string("periodic on both sides of ") + "xyz"[d] + " or on neither");
     }
   }
+  s.wall_model = fluid.choice("wall_model", {"laminar", "spalding"}, "laminar") == "spalding"
+                     ? FlowSettings::WallModel::spalding
+                     : FlowSettings::WallModel::laminar;
   if (const auto t = fluid.optional_section("time_step")) {
     s.cfl = t->real("cfl", Dim::none, Range{0.0, 0.5, true, false}, s.cfl);
     s.viscous_number = t->real("viscous_number", Dim::none, Range{0.0, 1.0, true, false}, s.viscous_number);

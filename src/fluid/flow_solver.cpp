@@ -394,9 +394,70 @@ void FlowSolver::viscous(double dt) {
         for (int i = i0; i < i1; ++i) acc[row + i] = uq[row + i] + dt * acc[row + i] / rho[row + i];
       }
   }
+  if (settings_.wall_model == FlowSettings::WallModel::spalding) wall_model_stress(dt);
   for (int q = 0; q < 3; ++q) std::swap(u_[q], work_[q]);
   g.exchange({&u_[0], &u_[1], &u_[2]});
   fill_velocity_ghosts(u_);
+}
+
+double spalding_stress_factor(double speed, double y, double nu) {
+  constexpr double kappa = 0.41, b = 5.2;
+  const double reynolds = speed * y / nu;  // = u+ y+
+  if (!(reynolds > 1e-12)) return 1;
+  const double e = std::exp(-kappa * b), log_re = std::log(reynolds);
+  // G(u+) = ln(u+ y+(u+)) - ln(reynolds), y+(u+) by Spalding, rises with u+; its root is unique and
+  // lies in (0, sqrt(reynolds)] because y+ >= u+. Newton on the logarithm (y+ grows like
+  // exp(kappa u+)), kept inside the bracket by bisection.
+  auto residual = [&](double up, double& slope) {
+    const double k = kappa * up, ek = std::exp(k);
+    const double yplus = up + e * (ek - 1 - k - k * k / 2 - k * k * k / 6);
+    const double dyplus = 1 + e * kappa * (ek - 1 - k - k * k / 2);
+    slope = dyplus / yplus + 1 / up;
+    return std::log(up * yplus) - log_re;
+  };
+  double lo = 0, hi = std::sqrt(reynolds), up = hi;
+  for (int it = 0; it < 200; ++it) {
+    double slope;
+    const double r = residual(up, slope);
+    if (r < 0) {
+      lo = up;
+    } else {
+      hi = up;
+    }
+    double next = up - r / slope;
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    const bool done = std::abs(next - up) <= 1e-14 * up;
+    up = next;
+    if (done) break;
+  }
+  return std::max(1.0, reynolds / (up * up));
+}
+
+// The viscous step put mu_w 2 u_t / h^2 (mu_w: the wall face's viscosity, the cell's own) into the
+// wall cells' explicit stress. Take it out and put in the wall law's stress, implicit in u_t:
+//   u_t <- (u_t* + dt mu_w 2 u_t / (rho h^2)) / (1 + dt mu_w F 2 / (rho h^2)),
+// F = spalding_stress_factor(|u_t|, h/2, mu/rho) from the velocity before the step.
+void FlowSolver::wall_model_stress(double dt) {
+  const FluidGrid& g = *grid_;
+  for (int d = 0; d < 3; ++d)
+    for (int side = 0; side < 2; ++side) {
+      if (!g.at_domain_edge(d, side) || g.boundary(d, side) != BoundaryKind::no_slip) continue;
+      std::array<int, 3> lo{g.begin(0), g.begin(1), g.begin(2)}, hi{g.end(0), g.end(1), g.end(2)};
+      lo[d] = side == 0 ? 0 : g.cells()[d] - 1;
+      hi[d] = lo[d] + 1;
+      const double h = g.h(d), y = h / 2;
+      for_box(lo, hi, [&](int i, int j, int k) {
+        const std::size_t c = g.at(i, j, k);
+        double speed2 = 0;
+        for (int q = 0; q < 3; ++q)
+          if (q != d) speed2 += u_[q][c] * u_[q][c];
+        const double mu = mu_[c], rho = rho_[c];
+        const double factor = spalding_stress_factor(std::sqrt(speed2), y, mu / rho);
+        const double laminar = dt * 2 * mu / (rho * h * h);
+        for (int q = 0; q < 3; ++q)
+          if (q != d) work_[q][c] = (work_[q][c] + laminar * u_[q][c]) / (1 + laminar * factor);
+      });
+    }
 }
 
 PoissonStats FlowSolver::project(double dt, bool with_gravity) {

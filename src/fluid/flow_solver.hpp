@@ -52,6 +52,12 @@ struct FlowSettings {
   double gravity_number = 0.5;  // dt <= gravity_number sqrt(h_min / |g|)
   double dt_max = 1e-2, dt_min = 1e-12;
   double dt_growth = 1.1;  // dt grows at most by this factor per step
+  // Stress on no-slip walls. `laminar`: mu u / (h/2) from the cell centre, which is the resolved
+  // stress only when the wall layer spans cells. `spalding`: the stress of Spalding's (1961) law of
+  // the wall at the cell centre (kappa 0.41, B 5.2), for wall layers thinner than a cell; it equals
+  // the laminar one for y+ below about 3, and is applied implicitly (theory F9b).
+  enum class WallModel { laminar, spalding };
+  WallModel wall_model = WallModel::laminar;
   PoissonSettings poisson;
 };
 
@@ -60,6 +66,10 @@ struct FlowStepStats {
   std::string dt_limit;  // "cfl", "viscous", "gravity", "max", "growth", "output"
   PoissonStats poisson;
 };
+
+// Spalding's law of the wall: for a speed U at distance y from the wall in a fluid of kinematic
+// viscosity nu, the factor tau_w y / (mu U) = y+ / u+ (>= 1; 1 in the viscous sublayer).
+double spalding_stress_factor(double speed, double y, double nu);
 
 class FlowSolver {
  public:
@@ -133,6 +143,7 @@ class FlowSolver {
   void sweep(int d, double dt, bool last);  // one direction of VOF + momentum advection
   void reconstruct(int d);                  // PLIC in owned cells and one layer beyond along d
   void viscous(double dt);                  // u <- u + dt div(tau) / rho
+  void wall_model_stress(double dt);        // the wall law on no-slip walls (after viscous)
   PoissonStats project(double dt, bool with_gravity);
 
   FlowSettings settings_;
