@@ -31,6 +31,14 @@ DemScene::DemScene(const ConfigNode& root, MPI_Comm comm, const std::string& cas
   Walls walls(solid, model, case_dir);
   dem_ = std::make_unique<DemSolver>(*decomp_, std::move(model), std::move(walls), DemSettings::from_config(solid));
   dem_->set_shapes(read_shapes(solid, case_dir));
+  // Free spheres (T17): bodies far larger than the grains (the bunker shot's ball), on every rank.
+  for (const auto& b : solid.list("free_spheres")) {
+    const int mat = dem_->model().material_index(b.text("material"), b.key_path("material"));
+    dem_->add_free_sphere(b.text("key", b.path()), mat, 0.5 * b.real("diameter", Dim::length, Range::positive()),
+                          b.vec3("position", Dim::length), b.vec3("velocity", Dim::velocity, Vec3{}),
+                          b.vec3("angular_velocity", Dim::angular_velocity, Vec3{}),
+                          b.real("density", Dim::density, Range::positive(), 0.0));
+  }
 
   const ConfigNode run = root.section("run");
   if (run.has("end_time")) end_time_ = run.real("end_time", Dim::time, Range::positive());
@@ -130,6 +138,7 @@ nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolv
     if (end_time_ && dem_->time() >= *end_time_ - 0.5 * dem_->dt()) break;
     if (max_steps_ && dem_->steps() >= *max_steps_) break;
     dem_->step();
+    after_step(opt);
     if (dem_->time() >= next_check - 0.5 * dem_->dt()) {
       next_check += check_interval_;
       stats = dem_->stats();
@@ -224,6 +233,17 @@ nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolv
       meshes.push_back(e);
     }
     s["mesh_walls"] = meshes;
+  }
+  if (!dem_->free_spheres().empty()) {
+    nlohmann::json spheres = nlohmann::json::array();
+    for (const auto& b : dem_->free_spheres())
+      spheres.push_back({{"key", b.key},
+                         {"position", {b.x.x, b.x.y, b.x.z}},
+                         {"velocity", {b.v.x, b.v.y, b.v.z}},
+                         {"angular_velocity", {b.omega.x, b.omega.y, b.omega.z}},
+                         {"contact_force", {b.force.x, b.force.y, b.force.z}},
+                         {"mass", b.mass}});
+    s["free_spheres"] = spheres;
   }
   nlohmann::json timers;
   for (const auto& [phase, st] : dem_->timers().reduce(comm))

@@ -40,6 +40,8 @@ class DemScene : public Scene {
     return false;
   }
   virtual void finish(const RunOptions& options) { (void)options; }
+  // After every step (all ranks): per-step quantities (the bunker shot's impulse and release).
+  virtual void after_step(const RunOptions& options) { (void)options; }
   virtual void quantities(nlohmann::json& q) { (void)q; }
   virtual CheckpointExtras extras() const { return {}; }
   virtual void restore(const CheckpointExtras& e) { (void)e; }

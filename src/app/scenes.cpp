@@ -6,13 +6,14 @@
 namespace tessera {
 
 std::unique_ptr<DemScene> make_dem_scene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir) {
-  const std::string scene = root.choice("scene", {"deposition", "bed"});
+  const std::string scene = root.choice("scene", {"deposition", "bed", "bunker_shot"});
   if (scene == "deposition") return make_deposition_scene(root, comm, case_dir);
+  if (scene == "bunker_shot") return make_bunker_shot_scene(root, comm, case_dir);
   return make_bed_scene(root, comm, case_dir);
 }
 
 std::unique_ptr<Scene> make_scene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir) {
-  const std::string scene = root.choice("scene", {"deposition", "bed", "flow"});
+  const std::string scene = root.choice("scene", {"deposition", "bed", "bunker_shot", "flow"});
   if (scene == "flow") return make_flow_scene(root, comm, case_dir);
   return make_dem_scene(root, comm, case_dir);
 }

@@ -29,12 +29,19 @@ inline PairKey wall_key(std::int64_t element_key, int slot) {
   return (static_cast<PairKey>(element_key) << 32) | static_cast<PairKey>(kWallKeyBase + slot);
 }
 // Mesh-wall contacts: (element key, base + 256 + 8 mesh + ordinal of the contact with that mesh).
-// Wall slots stay below 256 (planes and boxes), meshes below kMaxMeshWalls.
-constexpr int kMaxWallSlots = 256, kMaxMeshWalls = 96, kMeshContactsPerSphere = 8;
+// Wall slots stay below 256 (planes and boxes), meshes below kMaxMeshWalls. Free-sphere contacts
+// (free_spheres.hpp): (element key, base + 960 + sphere), spheres below kMaxFreeSpheres; they
+// travel with the element like mesh springs (is_mesh_key holds for both).
+constexpr int kMaxWallSlots = 256, kMaxMeshWalls = 88, kMeshContactsPerSphere = 8, kMaxFreeSpheres = 64;
 inline PairKey mesh_key(std::int64_t element_key, int mesh, int ordinal) {
   return (static_cast<PairKey>(element_key) << 32) |
          static_cast<PairKey>(kWallKeyBase + kMaxWallSlots + kMeshContactsPerSphere * mesh + ordinal);
 }
+inline PairKey free_sphere_key(std::int64_t element_key, int sphere) {
+  return (static_cast<PairKey>(element_key) << 32) |
+         static_cast<PairKey>(kWallKeyBase + kMaxWallSlots + kMeshContactsPerSphere * kMaxMeshWalls + sphere);
+}
 inline bool is_mesh_key(PairKey k) { return key_high(k) >= kWallKeyBase + kMaxWallSlots; }
+static_assert(kMaxWallSlots + kMeshContactsPerSphere * kMaxMeshWalls + kMaxFreeSpheres <= 1024);
 
 }  // namespace tessera

@@ -18,7 +18,8 @@ namespace tessera {
 
 namespace fs = std::filesystem;
 
-constexpr int kMeshStateSize = 16;  // origin, q, velocity, omega, theta, theta', theta''
+constexpr int kMeshStateSize = 16;        // origin, q, velocity, omega, theta, theta', theta''
+constexpr int kFreeSphereStateSize = 15;  // x, v, omega, force, torque
 
 void write_file_atomically(const std::string& path, const std::string& text) {
   const std::string tmp = path + ".tmp";
@@ -202,6 +203,22 @@ void write_checkpoint(const std::string& path, const DemSolver& dem, const Check
         mesh.insert(mesh.end(), row, row + kMeshStateSize);
       }
     f.write_rows("mesh_state", mesh.data(), mesh.size() / kMeshStateSize, kMeshStateSize);
+    // Free spheres (T17): state and wall springs, the same on every rank (rank 0 writes them).
+    std::vector<double> spheres, sphere_hist;
+    std::vector<std::uint64_t> sphere_keys;
+    if (comm_rank(comm) == 0) {
+      for (const auto& b : dem.free_spheres())
+        for (const Vec3& v : {b.x, b.v, b.omega, b.force, b.torque}) spheres.insert(spheres.end(), {v.x, v.y, v.z});
+      for (const auto& [key, h] : dem.free_sphere_histories()) {
+        sphere_keys.push_back(key);
+        sphere_hist.insert(sphere_hist.end(), h.begin(), h.end());
+      }
+    }
+    if (!dem.free_spheres().empty()) {
+      f.write_rows("free_sphere_state", spheres.data(), spheres.size() / kFreeSphereStateSize, kFreeSphereStateSize);
+      f.write_rows("free_sphere_history_keys", sphere_keys.data(), sphere_keys.size(), 1);
+      f.write_rows("free_sphere_history", sphere_hist.data(), sphere_keys.size(), 3);
+    }
     f.set_attribute("format", std::string("tessera-dem-checkpoint-3"));
     f.set_attribute("time", dem.time());
     f.set_attribute("steps", dem.steps());
@@ -240,6 +257,30 @@ CheckpointExtras read_checkpoint(const std::string& path, DemSolver& dem) {
       m.theta = r[13], m.theta_dot = r[14], m.theta_ddot = r[15];
       m.place();
     }
+  }
+  // Free spheres: a checkpoint without them (a bed) leaves the case's initial state, one with
+  // them must hold as many as the case declares.
+  auto& spheres = dem.free_spheres();
+  if (f.has("free_sphere_state")) {
+    int scols = 0;
+    const auto state = f.read_all<double>("free_sphere_state", scols);
+    if (state.size() != spheres.size() * kFreeSphereStateSize)
+      throw InputError(
+          "restart", path,
+          "a checkpoint made with the same free spheres as this case (" + std::to_string(spheres.size()) + ")");
+    for (std::size_t k = 0; k < spheres.size(); ++k) {
+      const double* r = &state[k * kFreeSphereStateSize];
+      FreeSphere& b = spheres[k];
+      b.x = {r[0], r[1], r[2]}, b.v = {r[3], r[4], r[5]}, b.omega = {r[6], r[7], r[8]};
+      b.force = {r[9], r[10], r[11]}, b.torque = {r[12], r[13], r[14]};
+      b.x_build = b.x;
+    }
+    int kc = 0, hc = 0;
+    const auto keys = f.read_all<std::uint64_t>("free_sphere_history_keys", kc);
+    const auto hist = f.read_all<double>("free_sphere_history", hc);
+    HistoryMap h;
+    for (std::size_t k = 0; k < keys.size(); ++k) h[keys[k]] = {hist[3 * k], hist[3 * k + 1], hist[3 * k + 2]};
+    dem.set_free_sphere_histories(std::move(h));
   }
   ParticleStore& p = dem.particles();
   if (f.attribute_long("wall_slots") != p.wall_slots)

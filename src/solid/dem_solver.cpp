@@ -165,6 +165,13 @@ void DemSolver::setup(bool fresh) {
       if (!model_.has_pair(a, b))
         throw InputError("solid.contact.pairs", "", "an entry for every material pair in use");
   walls_.check_pairs(model_, body_materials);
+  for (const auto& f : free_) {
+    for (int a : body_materials)
+      if (!model_.has_pair(a, f.material))
+        throw InputError("solid.contact.pairs", "",
+                         "an entry for the free sphere '" + f.key + "' with every body material");
+    walls_.check_pairs(model_, {f.material});
+  }
 
   // Contact duration (T6): the shortest over the pairs in use, for the lightest body.
   t_contact_ = 1e300;
@@ -386,6 +393,7 @@ void DemSolver::rebuild() {
     }
     if (shaped()) build_wall_list_elements(histories);
     build_mesh_candidates();
+    build_free_sphere_candidates();
     if (model_.law() == LawKind::linear_spring_dashpot)
       fill_pair_coefficients<LinearSpringDashpot>();
     else
@@ -600,11 +608,9 @@ void DemSolver::compute_mesh_forces(double dt) {
   ContactLanes& L = lanes_;
   const ContactCoefficients* sets = coefficient_sets_.data();
   std::vector<int> cands;
-  mesh_hist_next_.clear();
   // The load on each mesh is summed over all contacts in key order, on every rank: the same bits
   // whatever the decomposition (pivot dynamics stay rank-count independent).
   std::vector<double>& loads = mesh_loads_;  // per contact: key (2 x 32 bits), mesh, force, moment
-  loads.clear();
   for (std::size_t k = 0; k < mesh_entity_.size(); ++k) {
     const std::size_t e = mesh_entity_[k];
     MeshWall& m = meshes[mesh_of_[k]];
@@ -647,14 +653,6 @@ void DemSolver::compute_mesh_forces(double dt) {
                                  static_cast<double>(mesh_of_[k]), -f.x, -f.y, -f.z, -moment.x, -moment.y, -moment.z});
     }
   }
-  if (dt > 0) mesh_hist_.swap(mesh_hist_next_);
-  // A pivot needs the whole load every step; other meshes only when it is reported.
-  mesh_loads_pending_ = true;
-  for (const auto& m : meshes)
-    if (m.motion == MeshWall::Motion::pivot) {
-      sum_mesh_loads();
-      break;
-    }
 }
 
 void DemSolver::sum_mesh_loads() {
@@ -681,9 +679,16 @@ void DemSolver::sum_mesh_loads() {
   });
   for (const auto c : order) {
     const double* r = &all[c * stride];
-    MeshWall& m = meshes[static_cast<std::size_t>(r[2])];
-    m.force += Vec3{r[3], r[4], r[5]};
-    m.moment += Vec3{r[6], r[7], r[8]};
+    const auto target = static_cast<std::size_t>(r[2]);
+    if (target < meshes.size()) {
+      MeshWall& m = meshes[target];
+      m.force += Vec3{r[3], r[4], r[5]};
+      m.moment += Vec3{r[6], r[7], r[8]};
+    } else {  // a free sphere: moment about its centre
+      FreeSphere& s = free_[target - meshes.size()];
+      s.force += Vec3{r[3], r[4], r[5]};
+      s.torque += Vec3{r[6], r[7], r[8]};
+    }
   }
 }
 
@@ -716,9 +721,9 @@ bool DemSolver::needs_rebuild() {
   }
   auto t = timers_.scope("reduction");
   MPI_Allreduce(MPI_IN_PLACE, &max2, 1, MPI_DOUBLE, MPI_MAX, decomp_.comm());
-  if (walls_.meshes().empty()) return max2 > 0.25 * skin_ * skin_;
-  // Moving meshes: body and wall displacements add up (same wall state on every rank).
-  return std::sqrt(max2) + mesh_displacement() > 0.5 * skin_;
+  if (walls_.meshes().empty() && free_.empty()) return max2 > 0.25 * skin_ * skin_;
+  // Moving meshes and free spheres: body and their displacements add up (the same on every rank).
+  return std::sqrt(max2) + std::max(mesh_displacement(), free_sphere_displacement()) > 0.5 * skin_;
 }
 
 void DemSolver::integrate_first() {
@@ -871,6 +876,20 @@ void DemSolver::fill_pair_coefficients() {
     const std::size_t e = mesh_entity_[k];
     mesh_coefficient_[k] = lookup({p_.material[body(e)], meshes[mesh_of_[k]].material, p_.mass[body(e)], radius(e)});
   }
+  // Free spheres: with grains as a body pair (m*, R* of the two), with walls and meshes as a wall.
+  free_coefficient_.resize(free_entity_.size());
+  for (std::size_t k = 0; k < free_entity_.size(); ++k) {
+    const std::size_t e = free_entity_[k];
+    const FreeSphere& s = free_[free_of_[k]];
+    const double m = p_.mass[body(e)], r = radius(e);
+    free_coefficient_[k] =
+        lookup({p_.material[body(e)], s.material, m * s.mass / (m + s.mass), r * s.radius / (r + s.radius)});
+  }
+  free_wall_coefficient_.clear();
+  for (const auto& s : free_) {
+    for (const auto& w : prims) free_wall_coefficient_.push_back(lookup({s.material, w.material, s.mass, s.radius}));
+    for (const auto& m : meshes) free_wall_coefficient_.push_back(lookup({s.material, m.material, s.mass, s.radius}));
+  }
 }
 
 void DemSolver::compute_forces(bool update_history) {
@@ -883,7 +902,19 @@ void DemSolver::compute_forces(bool update_history) {
   {
     auto t = timers_.scope("wall_forces");
     compute_wall_forces(dt);
-    if (!walls_.meshes().empty()) compute_mesh_forces(dt);
+    const auto& meshes = walls_.meshes();
+    if (meshes.empty() && free_.empty()) return;
+    mesh_hist_next_.clear();
+    mesh_loads_.clear();
+    if (!meshes.empty()) compute_mesh_forces(dt);
+    if (!free_.empty()) compute_free_sphere_forces(dt);
+    if (dt > 0) mesh_hist_.swap(mesh_hist_next_);
+    // A pivot and a free sphere need the whole load every step; other meshes only when reported.
+    mesh_loads_pending_ = true;
+    bool now = !free_.empty();
+    for (const auto& m : meshes) now = now || m.motion == MeshWall::Motion::pivot;
+    if (now) sum_mesh_loads();
+    compute_free_sphere_wall_forces(dt);
   }
 }
 
@@ -1045,6 +1076,7 @@ void DemSolver::step() {
   {
     auto t = timers_.scope("integrate");
     integrate_first();
+    free_spheres_first();
     if (shaped()) update_elements(0, p_.owned);
     for (auto& m : walls_.meshes()) {
       if (m.motion == MeshWall::Motion::pivot) m.theta_dot += 0.5 * dt_ * m.theta_ddot;
@@ -1062,6 +1094,7 @@ void DemSolver::step() {
   {
     auto t = timers_.scope("integrate");
     integrate_second();
+    free_spheres_second();
     for (auto& m : walls_.meshes()) {
       m.update_acceleration(settings_.gravity);
       if (m.motion == MeshWall::Motion::pivot) {

@@ -32,6 +32,7 @@
 #include "solid/contact_history.hpp"
 #include "solid/contact_kernel.hpp"
 #include "solid/contact_model.hpp"
+#include "solid/free_spheres.hpp"
 #include "solid/halo.hpp"
 #include "solid/neighbor_list.hpp"
 #include "solid/particles.hpp"
@@ -92,6 +93,15 @@ class DemSolver {
   // Adds a body of template `shape` (>= 1) if this rank owns its centre; q maps body to world.
   void add_body(std::int64_t id, int material, int shape, const Vec3& x, const Quaternion& q, const Vec3& v,
                 const Vec3& omega = {}, double density = 0);
+  // Free spheres (T17, free_spheres.hpp): every rank adds the same ones, before setup. density <= 0:
+  // the material's. In plane mode a disc of the plane's thickness, its centre put in the plane.
+  void add_free_sphere(const std::string& key, int material, double radius, const Vec3& x, const Vec3& v,
+                       const Vec3& omega = {}, double density = 0);
+  const std::vector<FreeSphere>& free_spheres() const { return free_; }
+  std::vector<FreeSphere>& free_spheres() { return free_; }  // restart: state set from a checkpoint
+  // Springs of free spheres on walls and meshes (the same on every rank; restart).
+  const HistoryMap& free_sphere_histories() const { return free_hist_; }
+  void set_free_sphere_histories(HistoryMap h) { free_hist_ = std::move(h); }
   // History keys are element keys: body order * key_stride() + sphere index (1 without templates).
   std::int64_t key_stride() const { return key_stride_; }
   // Contact histories to use at the first build (restart).
@@ -150,6 +160,14 @@ class DemSolver {
   void build_mesh_candidates();
   void compute_mesh_forces(double dt);
   double mesh_displacement() const;  // largest node displacement since the last build
+  // Free spheres (dem_free_spheres.cpp): grain candidates at rebuild, grain contacts, wall and mesh
+  // contacts (every rank alike), and the two half-kicks.
+  void build_free_sphere_candidates();
+  void compute_free_sphere_forces(double dt);
+  void compute_free_sphere_wall_forces(double dt);
+  void free_spheres_first();
+  void free_spheres_second();
+  double free_sphere_displacement() const;
   void rotate_shaped(std::size_t i, const double* torque, double h, double dt);
   bool anisotropic(int shape) const { return shape > 0 && anisotropic_[shape]; }
 
@@ -214,7 +232,12 @@ class DemSolver {
   std::vector<std::int32_t> mesh_entity_, mesh_of_, mesh_cand_start_, mesh_cands_, mesh_coefficient_;
   std::unordered_map<std::uint64_t, std::array<double, 3>> mesh_hist_, mesh_hist_next_;
   std::vector<std::vector<Vec3>> mesh_nodes_build_;
-  std::vector<double> mesh_loads_;  // this rank's mesh contacts at the last evaluation
+  std::vector<double> mesh_loads_;  // this rank's mesh (and free-sphere) contacts at the last evaluation
+  // Free spheres: (entity, sphere) pairs within reach at the last rebuild and their coefficient
+  // sets; the spheres' own wall and mesh coefficient sets (sphere-major); their wall springs.
+  std::vector<FreeSphere> free_;
+  std::vector<std::int32_t> free_entity_, free_of_, free_coefficient_, free_wall_coefficient_;
+  HistoryMap free_hist_, free_hist_next_;
   bool mesh_loads_pending_ = false;
   double dt_ = 0, time_ = 0, skin_ = 0, r_max_ = 0, t_contact_ = 0;
   long steps_ = 0;
