@@ -1,12 +1,14 @@
 // SPDX-License-Identifier: MIT
 // The bunker shot (bunker-shot seed, issue 5; docs/theory.md T16-T18): a sand wedge swung about a
 // pivot through a plane bed of sand discs in which a ball (a free sphere, T17) rests.
+// The swing starts where the head's lowest point clears the bed's highest grain by
+// `start_clearance` (2 mm), or at `start_angle_deg` when given.
 //
 // Start: a checkpoint of the bed with the ball at rest (`bed.file`, from ball_small.yaml or the
 // like). The club is placed as the seed places it (section 4.1): the pivot on the vertical through
 // the ball's centre, `shaft_length` above the point the leading edge passes at the bottom of the
 // swing, which is the ball's lowest point moved `shot_depth` down (Table 2: 0 to 10 mm). The swing
-// starts at `start_angle_deg` (theta, 0 with the club vertical; negative behind the ball) with
+// starts (theta, 0 with the club vertical; negative behind the ball; see set_start_angle) with
 // theta' = `angular_velocity`, and follows eq. 8 with the club's mass and moment of inertia per
 // unit depth times the plane's thickness.
 //
@@ -28,6 +30,7 @@
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <optional>
 
 #include "app/dem_scene.hpp"
 #include "app/scenes.hpp"
@@ -59,7 +62,8 @@ class BunkerShotScene final : public DemScene {
     depth_ = c.real("shot_depth", Dim::length, Range{-0.05, 0.05, true, true}, 0.0);
     shaft_ = c.real("shaft_length", Dim::length, Range::positive(), 0.7);
     omega0_ = c.real("angular_velocity", Dim::angular_velocity, Range::positive(), 50.0);
-    start_deg_ = c.real("start_angle_deg", Dim::none, Range{-90.0, 0.0, true, false});
+    if (c.has("start_angle_deg")) start_deg_ = c.real("start_angle_deg", Dim::none, Range{-90.0, 0.0, true, false});
+    clearance_ = c.real("start_clearance", Dim::length, Range::non_negative(), clearance_);
     mass_per_depth_ = c.real("mass_per_depth", Dim::none, Range::positive());
     inertia_per_depth_ = c.real("moment_of_inertia_per_depth", Dim::none, Range::positive());
     applied_moment_per_depth_ = c.real("applied_moment_per_depth", Dim::none, Range{-1e300, 1e300, false, false}, 0.0);
@@ -85,6 +89,7 @@ class BunkerShotScene final : public DemScene {
     read_checkpoint(file_, *dem_);
     meshes.push_back(std::move(club));
     dem_->set_clock(0.0, 0);
+    set_start_angle();
   }
   bool continues_state() const override { return true; }
 
@@ -141,6 +146,7 @@ class BunkerShotScene final : public DemScene {
     q["pivot"] = {pivot_.x, pivot_.z};
     q["leading_edge_bottom"] = {pivot_.x, pivot_.z - shaft_};
     q["club_mass"] = club.mass;
+    q["club_start_angle_deg"] = start_deg_ ? *start_deg_ : start_used_deg_;
   }
 
   CheckpointExtras extras() const override {
@@ -155,6 +161,7 @@ class BunkerShotScene final : public DemScene {
       return it->second;
     };
     impulse_ = get("impulse"), release_time_ = get("release_time"), hit_wall_ = get("hit_wall") != 0.0;
+    start_used_deg_ = get("start_deg");
     release_v_ = {get("release_vx"), get("release_vy"), get("release_vz")};
     next_series_ = get("next_series");
   }
@@ -209,16 +216,46 @@ class BunkerShotScene final : public DemScene {
     for (const auto& p : nodes) m.local.push_back(Vec3{p.x + edge.x, p.y, p.z + edge.z} - pivot_);
     m.theta_dot = omega0_;
     dem_->walls().add_mesh(m);  // q0 = identity: the club vertical
-    MeshWall& club = dem_->walls().meshes().back();
-    club.theta = start_deg_ * kDeg;
-    club.q = Quaternion{std::cos(0.5 * club.theta), club.axis.x * std::sin(0.5 * club.theta),
-                        club.axis.y * std::sin(0.5 * club.theta), club.axis.z * std::sin(0.5 * club.theta)};
+  }
+
+  static void turn(MeshWall& club, double theta) {
+    club.theta = theta;
+    club.q = Quaternion{std::cos(0.5 * theta), club.axis.x * std::sin(0.5 * theta), club.axis.y * std::sin(0.5 * theta),
+                        club.axis.z * std::sin(0.5 * theta)};
     club.place();
+  }
+
+  // The swing's start: start_angle_deg if given; otherwise the angle nearest the bottom (in 0.01 deg)
+  // at which the head's lowest point is start_clearance above the bed's highest grain, so that
+  // the club enters the sand moving, whatever the depth and the design (collective).
+  void set_start_angle() {
+    MeshWall& club = dem_->walls().meshes().back();
+    if (start_deg_) {
+      turn(club, *start_deg_ * kDeg);
+      return;
+    }
+    const ParticleStore& p = dem_->particles();
+    double top = -1e300;
+    for (std::size_t i = 0; i < p.owned; ++i) top = std::max(top, p.x[3 * i + 2] + p.radius[i]);
+    MPI_Allreduce(MPI_IN_PLACE, &top, 1, MPI_DOUBLE, MPI_MAX, dem_->decomposition().comm());
+    auto lowest = [&](double theta) {
+      turn(club, theta);
+      double z = 1e300;
+      for (const auto& n : club.nodes) z = std::min(z, n.z);
+      return z;
+    };
+    int step = 0;
+    while (lowest(-step * 0.01 * kDeg) < top + clearance_) {
+      if (++step > 9000) throw InputError("club.start_clearance", "", "a start above the bed within 90 degrees");
+    }
+    start_used_deg_ = -step * 0.01;
   }
 
   std::string file_;
   ClubHeadDesign design_;
-  double depth_ = 0, shaft_ = 0.7, omega0_ = 50, start_deg_ = 0;
+  double depth_ = 0, shaft_ = 0.7, omega0_ = 50;
+  std::optional<double> start_deg_;
+  double clearance_ = 0.002, start_used_deg_ = 0;
   double mass_per_depth_ = 0, inertia_per_depth_ = 0, applied_moment_per_depth_ = 0;
   int material_ = 0, ball_ = -1;
   Vec3 pivot_;

@@ -392,6 +392,7 @@ void DemSolver::rebuild() {
       }
     }
     if (shaped()) build_wall_list_elements(histories);
+    x_moving_build_ = x_build_;
     build_mesh_candidates();
     build_free_sphere_candidates();
     if (model_.law() == LawKind::linear_spring_dashpot)
@@ -693,7 +694,10 @@ void DemSolver::sum_mesh_loads() {
 }
 
 bool DemSolver::needs_rebuild() {
-  double max2 = 0;
+  // [0]: squared largest displacement since the list build; [1]: since the moving walls' candidates
+  // were last found (sphere bodies; the same as [0] for shaped ones).
+  double max2[2] = {0, 0};
+  const bool moving = !walls_.meshes().empty() || !free_.empty();
   {
     auto scope = timers_.scope("neighbor");  // the displacement check is part of the list's cost
     if (shaped()) {
@@ -708,22 +712,51 @@ bool DemSolver::needs_rebuild() {
         const double c = q[0] * q0[4 * i] + q[1] * q0[4 * i + 1] + q[2] * q0[4 * i + 2] + q[3] * q0[4 * i + 3];
         const double d =
             std::sqrt(dx * dx + dy * dy + dz * dz) + 2.0 * arm_[p_.shape[i]] * std::sqrt(std::max(0.0, 1.0 - c * c));
-        max2 = std::max(max2, d * d);
+        max2[0] = std::max(max2[0], d * d);
       }
+      max2[1] = max2[0];
     }
     const double* x = p_.x.data();
     const double* x0 = x_build_.data();
     const std::size_t n = shaped() ? 0 : p_.owned;
-    for (std::size_t k = 0; k < 3 * n; k += 3) {
-      const double dx = x[k] - x0[k], dy = x[k + 1] - x0[k + 1], dz = x[k + 2] - x0[k + 2];
-      max2 = std::max(max2, dx * dx + dy * dy + dz * dz);
+    if (moving && n > 0) {
+      const double* xm = x_moving_build_.data();
+      for (std::size_t k = 0; k < 3 * n; k += 3) {
+        const double dx = x[k] - x0[k], dy = x[k + 1] - x0[k + 1], dz = x[k + 2] - x0[k + 2];
+        const double mx = x[k] - xm[k], my = x[k + 1] - xm[k + 1], mz = x[k + 2] - xm[k + 2];
+        max2[0] = std::max(max2[0], dx * dx + dy * dy + dz * dz);
+        max2[1] = std::max(max2[1], mx * mx + my * my + mz * mz);
+      }
+    } else {
+      for (std::size_t k = 0; k < 3 * n; k += 3) {
+        const double dx = x[k] - x0[k], dy = x[k + 1] - x0[k + 1], dz = x[k + 2] - x0[k + 2];
+        max2[0] = std::max(max2[0], dx * dx + dy * dy + dz * dz);
+      }
     }
   }
   auto t = timers_.scope("reduction");
-  MPI_Allreduce(MPI_IN_PLACE, &max2, 1, MPI_DOUBLE, MPI_MAX, decomp_.comm());
-  if (walls_.meshes().empty() && free_.empty()) return max2 > 0.25 * skin_ * skin_;
-  // Moving meshes and free spheres: body and their displacements add up (the same on every rank).
-  return std::sqrt(max2) + std::max(mesh_displacement(), free_sphere_displacement()) > 0.5 * skin_;
+  MPI_Allreduce(MPI_IN_PLACE, max2, 2, MPI_DOUBLE, MPI_MAX, decomp_.comm());
+  refresh_moving_ = false;
+  if (!moving) return max2[0] > 0.25 * skin_ * skin_;
+  // Moving meshes and free spheres: a body and a wall approach each other by at most the sum of
+  // their displacements (the same on every rank). The pair list is rebuilt only when the bodies
+  // moved skin/2; when only a wall did, its candidate lists are found again (sphere bodies) or
+  // everything is rebuilt (shaped bodies).
+  const bool walls_moved = std::sqrt(max2[1]) + std::max(mesh_displacement(), free_sphere_displacement()) > 0.5 * skin_;
+  if (max2[0] > 0.25 * skin_ * skin_ || (walls_moved && shaped())) return true;
+  refresh_moving_ = walls_moved;
+  return false;
+}
+
+void DemSolver::refresh_moving_candidates() {
+  auto t = timers_.scope("neighbor");
+  x_moving_build_.assign(p_.x.begin(), p_.x.begin() + 3 * static_cast<std::ptrdiff_t>(p_.owned));
+  build_mesh_candidates();
+  build_free_sphere_candidates();
+  if (model_.law() == LawKind::linear_spring_dashpot)
+    fill_pair_coefficients<LinearSpringDashpot>();
+  else
+    fill_pair_coefficients<HertzMindlin>();
 }
 
 void DemSolver::integrate_first() {
@@ -1086,9 +1119,12 @@ void DemSolver::step() {
   if (needs_rebuild()) {
     rebuild();
   } else {
-    auto t = timers_.scope("ghost_comm");
-    halo_.forward(p_);
-    if (shaped()) update_elements(p_.owned, p_.size());
+    {
+      auto t = timers_.scope("ghost_comm");
+      halo_.forward(p_);
+      if (shaped()) update_elements(p_.owned, p_.size());
+    }
+    if (refresh_moving_) refresh_moving_candidates();
   }
   compute_forces(true);
   {

@@ -158,6 +158,10 @@ class DemSolver {
   void element_motion(std::size_t e);
   // Triangle-mesh walls (T14): candidates at rebuild, forces each step, motion.
   void build_mesh_candidates();
+  // Only the moving walls moved far enough: their candidates again, the pair list kept.
+  void refresh_moving_candidates();
+  bool refresh_moving_ = false;
+  std::vector<double> x_moving_build_;  // owned bodies at the last candidate search of moving walls
   void compute_mesh_forces(double dt);
   double mesh_displacement() const;  // largest node displacement since the last build
   // Free spheres (dem_free_spheres.cpp): grain candidates at rebuild, grain contacts, wall and mesh

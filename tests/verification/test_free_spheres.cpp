@@ -143,7 +143,7 @@ run: {end_time: 0.2 s, check_interval: 2 ms}
   const std::string shot = "scene: bunker_shot\n" + domain + solid + ball_line + R"(
 bed: {file: toy_bunker_ball/checkpoint.h5}
 club: {loft_deg: 58, bounce_deg: 10, shot_depth: 1 mm, shaft_length: 100 mm, angular_velocity: 50 rad/s,
-       start_angle_deg: -20, mass_per_depth: 4.0, moment_of_inertia_per_depth: 0.05, material: club}
+       mass_per_depth: 4.0, moment_of_inertia_per_depth: 0.05, material: club}
 run: {end_time: 8 ms, check_interval: 0.5 ms}
 )";
   run_case_on(2, bed, {}, "toy_bunker_bed");
