@@ -11,7 +11,9 @@ release angle and speed, their change from the stiffest run, upward impulse), an
 usage: tools/bunker_stiffness.py [--case cases/bunker_shot/small.yaml]
          [--relax cases/bunker_shot/relax_small.yaml] [--bed runs/bunker_relax/checkpoint.h5]
          [--stiffness 1e6,3e6,1e7,3e7,1e8,3e8] [--ranks 2] [--out runs/bunker_stiffness] [--set K=V ...]
-Output: OUT/stiffness.csv, OUT/stiffness.md, OUT/stiffness.png
+         [--ensemble N]
+Output: OUT/stiffness.csv, OUT/stiffness.md, OUT/stiffness.png (means of the ensemble, +- their
+standard error).
 """
 import argparse
 import csv
@@ -53,11 +55,15 @@ def main():
     ap.add_argument("--ranks", type=int, default=2)
     ap.add_argument("--out", default="runs/bunker_stiffness")
     ap.add_argument("--set", action="append", default=[])
+    ap.add_argument("--ensemble", type=int, default=1,
+                    help="shots per stiffness: the depth moved by 0, +0.05, -0.05, +0.1, ... mm (a granular "
+                         "shot is chaotic: one shot's result scatters by more than 2 %%)")
     args = ap.parse_args()
     out = os.path.abspath(args.out)
     os.makedirs(out, exist_ok=True)
     bed = os.path.abspath(args.bed)
     case_text, relax_text = open(args.case).read(), open(args.relax).read()
+    depth = float(re.search(r"shot_depth: ([0-9.eE+-]+) mm", case_text).group(1)) * 1e-3
     mpi = ["mpirun", "-np", str(args.ranks), TESSERA, "run"]
     rows = []
     for kn in [float(v) for v in args.stiffness.split(",")]:
@@ -66,21 +72,35 @@ def main():
         shot_case = os.path.join(out, tag + "_shot.yaml")
         open(relax_case, "w").write(with_stiffness(relax_text, kn, restitution=0.1))
         open(shot_case, "w").write(with_stiffness(case_text, kn))
-        relax_dir, shot_dir = os.path.join(out, tag + "_relax"), os.path.join(out, tag + "_shot")
-        if not os.path.isfile(os.path.join(shot_dir, "summary.json")):
+        relax_dir = os.path.join(out, tag + "_relax")
+        if not os.path.isfile(os.path.join(relax_dir, "checkpoint.h5")):
             run(mpi + [relax_case, "--output", relax_dir, "--quiet", "--set", "bed.file=" + bed,
                        "--set", "run.end_time=" + args.relax_time], relax_dir + ".log")
-            run(mpi + [shot_case, "--output", shot_dir, "--quiet",
-                       "--set", "bed.file=" + os.path.join(relax_dir, "checkpoint.h5")] +
-                sum((["--set", s] for s in args.set), []), shot_dir + ".log")
-        s = json.load(open(os.path.join(shot_dir, "summary.json")))
-        q = s["quantities"]
-        rows.append({"kn": kn, "dt": s["dt"], "steps": s["steps"], "wall_s": s["wall_seconds"],
-                     "release_angle_deg": q["release_angle_deg"], "release_speed_mps": q["release_speed_mps"],
-                     "club_upward_impulse": q["club_upward_impulse"],
-                     "club_angular_velocity_loss": q["club_angular_velocity_loss"]})
-        print("k_n %-8g dt %.3g s  %7d steps  %6.1f s  release %.2f deg %.3f m/s" % (
-            kn, s["dt"], s["steps"], s["wall_seconds"], q["release_angle_deg"], q["release_speed_mps"]), flush=True)
+        shots = []
+        for m in range(args.ensemble):
+            offset = 0.05e-3 * ((m + 1) // 2) * (1 if m % 2 else -1)
+            shot_dir = os.path.join(out, tag + "_shot" + ("" if m == 0 else "_e%d" % m))
+            if not os.path.isfile(os.path.join(shot_dir, "summary.json")):
+                run(mpi + [shot_case, "--output", shot_dir, "--quiet",
+                           "--set", "bed.file=" + os.path.join(relax_dir, "checkpoint.h5")] +
+                    (["--set", "club.shot_depth=%g" % (depth + offset)] if m else []) +
+                    sum((["--set", s] for s in args.set), []), shot_dir + ".log")
+            shots.append(json.load(open(os.path.join(shot_dir, "summary.json"))))
+        s = shots[0]
+
+        def stat(key):
+            v = [x["quantities"][key] for x in shots]
+            mean = sum(v) / len(v)
+            sd = (sum((a - mean) ** 2 for a in v) / (len(v) - 1)) ** 0.5 if len(v) > 1 else 0.0
+            return mean, sd / len(v) ** 0.5, sd
+        angle, speed, impulse = stat("release_angle_deg"), stat("release_speed_mps"), stat("club_upward_impulse")
+        rows.append({"kn": kn, "dt": s["dt"], "steps": s["steps"], "wall_s": s["wall_seconds"], "shots": len(shots),
+                     "release_angle_deg": angle[0], "angle_stderr": angle[1], "angle_sd": angle[2],
+                     "release_speed_mps": speed[0], "speed_stderr": speed[1], "speed_sd": speed[2],
+                     "club_upward_impulse": impulse[0]})
+        print("k_n %-8g dt %.3g s  %7d steps  %6.1f s  release %.2f +- %.2f deg %.3f +- %.3f m/s (%d shots)" % (
+            kn, s["dt"], s["steps"], s["wall_seconds"], angle[0], angle[1], speed[0], speed[1], len(shots)),
+            flush=True)
     ref = max(rows, key=lambda r: r["kn"])
     for r in rows:
         r["angle_change"] = r["release_angle_deg"] / ref["release_angle_deg"] - 1
@@ -91,13 +111,13 @@ def main():
         w = csv.DictWriter(f, fieldnames=keys)
         w.writeheader()
         w.writerows(rows)
-    md = ["| k_n (N/m) | dt (s) | steps | wall (s) | release angle (deg) | change | release speed (m/s) | change |"
-          " upward impulse | within 2 % |", "|---|---|---|---|---|---|---|---|---|---|"]
+    md = ["| k_n (N/m) | dt (s) | steps | wall per shot (s) | shots | release angle (deg) | change |"
+          " release speed (m/s) | change | upward impulse | within 2 % |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in sorted(rows, key=lambda r: r["kn"]):
-        md.append("| %g | %.3g | %d | %.1f | %.2f | %+.1f %% | %.3f | %+.1f %% | %.3f | %s |" % (
-            r["kn"], r["dt"], r["steps"], r["wall_s"], r["release_angle_deg"], 100 * r["angle_change"],
-            r["release_speed_mps"], 100 * r["speed_change"], r["club_upward_impulse"],
-            "yes" if r["within_2pct"] else "no"))
+        md.append("| %g | %.3g | %d | %.1f | %d | %.2f +- %.2f | %+.1f %% | %.3f +- %.3f | %+.1f %% | %.3f | %s |" % (
+            r["kn"], r["dt"], r["steps"], r["wall_s"], r["shots"], r["release_angle_deg"], r["angle_stderr"],
+            100 * r["angle_change"], r["release_speed_mps"], r["speed_stderr"], 100 * r["speed_change"],
+            r["club_upward_impulse"], "yes" if r["within_2pct"] else "no"))
     open(os.path.join(out, "stiffness.md"), "w").write("\n".join(md) + "\n")
     print("\n".join(md))
     ok = [r for r in rows if r["within_2pct"]]
@@ -117,8 +137,12 @@ def main():
     rs = sorted(rows, key=lambda r: r["kn"])
     fig, ax = plt.subplots(1, 2, figsize=(9, 3.6))
     k = [r["kn"] for r in rs]
-    ax[0].semilogx(k, [100 * r["angle_change"] for r in rs], "o-", label="release angle")
-    ax[0].semilogx(k, [100 * r["speed_change"] for r in rs], "s-", label="release speed")
+    ref_a, ref_s = ref["release_angle_deg"], ref["release_speed_mps"]
+    ax[0].errorbar(k, [100 * r["angle_change"] for r in rs], yerr=[100 * r["angle_stderr"] / ref_a for r in rs],
+                   fmt="o-", capsize=3, label="release angle")
+    ax[0].errorbar(k, [100 * r["speed_change"] for r in rs], yerr=[100 * r["speed_stderr"] / ref_s for r in rs],
+                   fmt="s-", capsize=3, label="release speed")
+    ax[0].set_xscale("log")
     ax[0].axhspan(-2, 2, color="g", alpha=0.12, label="within 2 %")
     ax[0].set_xlabel("contact stiffness k_n (N/m)")
     ax[0].set_ylabel("change from the stiffest run (%)")

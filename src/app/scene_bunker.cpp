@@ -150,9 +150,9 @@ class BunkerShotScene final : public DemScene {
   }
 
   CheckpointExtras extras() const override {
-    return {{"impulse", impulse_},        {"release_time", release_time_}, {"hit_wall", hit_wall_ ? 1.0 : 0.0},
-            {"release_vx", release_v_.x}, {"release_vy", release_v_.y},    {"release_vz", release_v_.z},
-            {"next_series", next_series_}};
+    return {{"impulse", impulse_},         {"release_time", release_time_}, {"hit_wall", hit_wall_ ? 1.0 : 0.0},
+            {"release_vx", release_v_.x},  {"release_vy", release_v_.y},    {"release_vz", release_v_.z},
+            {"next_series", next_series_}, {"start_deg", start_used_deg_}};
   }
   void restore(const CheckpointExtras& e) override {
     auto get = [&](const char* k) {

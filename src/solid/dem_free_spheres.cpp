@@ -189,24 +189,15 @@ void DemSolver::compute_free_sphere_wall_forces(double dt) {
   if (dt > 0) free_hist_.swap(free_hist_next_);
 }
 
-void DemSolver::free_spheres_first() {
+void DemSolver::kick_free_spheres(bool drift) {
+  // Half-kick (and, after the first, the drift) of velocity Verlet, masked as the grains' are.
   const double h = 0.5 * dt_;
   const Vec3 vmask{velocity_mask_[0], velocity_mask_[1], velocity_mask_[2]};
   const Vec3 wmask{spin_mask_[0], spin_mask_[1], spin_mask_[2]};
   for (auto& s : free_) {
     s.v = hadamard(s.v + (s.force / s.mass + settings_.gravity) * h, vmask);
     s.omega = hadamard(s.omega + s.torque * (h / s.inertia), wmask);
-    s.x += s.v * dt_;
-  }
-}
-
-void DemSolver::free_spheres_second() {
-  const double h = 0.5 * dt_;
-  const Vec3 vmask{velocity_mask_[0], velocity_mask_[1], velocity_mask_[2]};
-  const Vec3 wmask{spin_mask_[0], spin_mask_[1], spin_mask_[2]};
-  for (auto& s : free_) {
-    s.v = hadamard(s.v + (s.force / s.mass + settings_.gravity) * h, vmask);
-    s.omega = hadamard(s.omega + s.torque * (h / s.inertia), wmask);
+    if (drift) s.x += s.v * dt_;
   }
 }
 

@@ -393,12 +393,7 @@ void DemSolver::rebuild() {
     }
     if (shaped()) build_wall_list_elements(histories);
     x_moving_build_ = x_build_;
-    build_mesh_candidates();
-    build_free_sphere_candidates();
-    if (model_.law() == LawKind::linear_spring_dashpot)
-      fill_pair_coefficients<LinearSpringDashpot>();
-    else
-      fill_pair_coefficients<HertzMindlin>();
+    find_moving_candidates();
   }
 }
 
@@ -751,6 +746,10 @@ bool DemSolver::needs_rebuild() {
 void DemSolver::refresh_moving_candidates() {
   auto t = timers_.scope("neighbor");
   x_moving_build_.assign(p_.x.begin(), p_.x.begin() + 3 * static_cast<std::ptrdiff_t>(p_.owned));
+  find_moving_candidates();
+}
+
+void DemSolver::find_moving_candidates() {
   build_mesh_candidates();
   build_free_sphere_candidates();
   if (model_.law() == LawKind::linear_spring_dashpot)
@@ -1109,7 +1108,7 @@ void DemSolver::step() {
   {
     auto t = timers_.scope("integrate");
     integrate_first();
-    free_spheres_first();
+    kick_free_spheres(true);
     if (shaped()) update_elements(0, p_.owned);
     for (auto& m : walls_.meshes()) {
       if (m.motion == MeshWall::Motion::pivot) m.theta_dot += 0.5 * dt_ * m.theta_ddot;
@@ -1130,7 +1129,7 @@ void DemSolver::step() {
   {
     auto t = timers_.scope("integrate");
     integrate_second();
-    free_spheres_second();
+    kick_free_spheres(false);
     for (auto& m : walls_.meshes()) {
       m.update_acceleration(settings_.gravity);
       if (m.motion == MeshWall::Motion::pivot) {

@@ -160,6 +160,7 @@ class DemSolver {
   void build_mesh_candidates();
   // Only the moving walls moved far enough: their candidates again, the pair list kept.
   void refresh_moving_candidates();
+  void find_moving_candidates();  // mesh and free-sphere candidates, then every coefficient index
   bool refresh_moving_ = false;
   std::vector<double> x_moving_build_;  // owned bodies at the last candidate search of moving walls
   void compute_mesh_forces(double dt);
@@ -169,8 +170,7 @@ class DemSolver {
   void build_free_sphere_candidates();
   void compute_free_sphere_forces(double dt);
   void compute_free_sphere_wall_forces(double dt);
-  void free_spheres_first();
-  void free_spheres_second();
+  void kick_free_spheres(bool drift);
   double free_sphere_displacement() const;
   void rotate_shaped(std::size_t i, const double* torque, double h, double dt);
   bool anisotropic(int shape) const { return shape > 0 && anisotropic_[shape]; }

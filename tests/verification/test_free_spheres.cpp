@@ -96,10 +96,11 @@ TEST(FreeSphere, GrainImpactConservesMomentum) {
 
 namespace tessera::test {
 
-// The bunker-shot pipeline at toy size, and its rank-count independence: a plane bed of about 900
-// discs of 1 mm, a 16 mm ball dropped on it, then a shot with a 100 mm shaft. The shot from the same
-// bed file on 1, 2 (2x1x1) and 4 (4x1x1) ranks gives the same quantities to the last bit: the ball's
-// load is summed in contact-key order on every rank, the club's too.
+// The bunker-shot pipeline at toy size, its rank-count independence and its restart: a plane bed of
+// about 900 discs of 1 mm, a 16 mm ball dropped on it, then a shot with a 100 mm shaft. The shot
+// from the same bed file on 1, 2 (2x1x1) and 4 (4x1x1) ranks gives the same quantities to the last
+// bit (the ball's load is summed in contact-key order on every rank, the club's too), and so does a
+// shot stopped at 4 ms and restarted from its checkpoint.
 TEST(BunkerShot, ToyShotIsRankCountIndependent) {
   const std::string solid = R"(
 solid:
@@ -151,6 +152,11 @@ run: {end_time: 8 ms, check_interval: 0.5 ms}
   const auto one = run_case_on(1, shot, {}, "toy_bunker_shot_1");
   const auto two = run_case_on(2, shot, {"domain.process_grid=[2,1,1]"}, "toy_bunker_shot_2");
   const auto four = run_case_on(4, shot, {"domain.process_grid=[4,1,1]"}, "toy_bunker_shot_4");
+  // Restart: 4 ms, a checkpoint, then on to 8 ms (the club, the ball, the impulse and the release
+  // so far come back from the checkpoint).
+  run_case_on(2, shot, {"domain.process_grid=[2,1,1]", "run.end_time=4ms"}, "toy_bunker_shot_r");
+  const auto resumed = run_case_on(2, shot, {"domain.process_grid=[2,1,1]"}, "toy_bunker_shot_r",
+                                   std::string("toy_bunker_shot_r/checkpoint.h5"));
   if (world_rank() != 0) return;
   const auto& q = one["quantities"];
   std::printf("toy shot: release %.3f deg at %.4f m/s (t = %.4g s), impulse %.4g, club loses %.3f rad/s\n",
@@ -165,6 +171,10 @@ run: {end_time: 8 ms, check_interval: 0.5 ms}
     EXPECT_EQ(q[k].get<double>(), four["quantities"][k].get<double>()) << k << " on 4 ranks";
   }
   EXPECT_EQ(one["free_spheres"][0]["position"], four["free_spheres"][0]["position"]);
+  for (const char* k : {"release_angle_deg", "release_speed_mps", "release_time", "club_upward_impulse",
+                        "club_angular_velocity_loss", "club_start_angle_deg"})
+    EXPECT_EQ(two["quantities"][k].get<double>(), resumed["quantities"][k].get<double>()) << k << " after a restart";
+  EXPECT_EQ(two["free_spheres"][0]["velocity"], resumed["free_spheres"][0]["velocity"]);
 }
 
 }  // namespace tessera::test
