@@ -76,9 +76,9 @@ def done(out):
 
 def run_local(args):
     os.makedirs(args.out, exist_ok=True)
-    todo = [c for c in jobs(args) if not done(command(args, c, args.ranks)[1])]
+    pending = [c for c in jobs(args) if not done(command(args, c, args.ranks)[1])]
     print("bunker sweep: %d jobs, %d to run, %d at a time on %d rank(s) each" %
-          (len(jobs(args)), len(todo), args.jobs, args.ranks))
+          (len(jobs(args)), len(pending), args.jobs, args.ranks))
 
     def one(combo):
         cmd, out = command(args, combo, args.ranks)
@@ -90,7 +90,7 @@ def run_local(args):
         return r.returncode
 
     with ThreadPoolExecutor(max_workers=args.jobs) as pool:
-        failed = sum(1 for rc in pool.map(one, todo) if rc != 0)
+        failed = sum(1 for rc in pool.map(one, pending) if rc != 0)
     report(args)
     if failed:
         sys.exit("bunker sweep: %d job(s) failed" % failed)
