@@ -98,7 +98,7 @@ def run_local(args):
 
 def write_slurm(args):
     os.makedirs(args.out, exist_ok=True)
-    lines = [" ".join(shlex.quote(x) for x in command(args, c, args.ranks)[0][3:]) for c in jobs(args)]
+    lines = [" ".join(shlex.quote(x) for x in command(args, c, args.ranks)[0][4:]) for c in jobs(args)]
     with open(os.path.join(args.out, "jobs.txt"), "w") as f:
         f.write("\n".join(lines) + "\n")
     script = """#!/bin/bash
