@@ -890,10 +890,21 @@ void DemSolver::fill_pair_coefficients() {
   auto radius = [&](std::size_t e) { return sh ? e_r_[e] : p_.radius[e]; };
   auto body = [&](std::size_t e) { return sh ? static_cast<std::size_t>(e_body_[e]) : e; };
   pair_coefficient_.resize(list_.size());
+  // Grains of many sizes make nearly every pair's (m*, R*) distinct: once the first 256 pairs show
+  // that (more than half of them new sets), the rest get their own sets without the hash map.
+  constexpr std::size_t probe = 256;
+  bool shared = true;
   for (std::size_t k = 0; k < list_.size(); ++k) {
     const std::size_t a = list_.first[k], b = list_.second[k];
     const double ra = radius(a), rb = radius(b);
-    pair_coefficient_[k] = lookup({p_.material[body(a)], p_.material[body(b)], list_.meff[k], ra * rb / (ra + rb)});
+    const Key key{p_.material[body(a)], p_.material[body(b)], list_.meff[k], ra * rb / (ra + rb)};
+    if (shared) {
+      pair_coefficient_[k] = lookup(key);
+      if (k + 1 == probe && 2 * coefficient_sets_.size() > probe) shared = false;
+    } else {
+      pair_coefficient_[k] = static_cast<std::int32_t>(coefficient_sets_.size());
+      coefficient_sets_.push_back(Law::coefficients(model_.pair(key.ma, key.mb), key.meff, key.reff));
+    }
   }
   // Walls: m* = m, R* = R (T7).
   const auto& prims = walls_.primitives();
