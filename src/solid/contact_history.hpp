@@ -41,6 +41,11 @@ inline PairKey free_sphere_key(std::int64_t element_key, int sphere) {
   return (static_cast<PairKey>(element_key) << 32) |
          static_cast<PairKey>(kWallKeyBase + kMaxWallSlots + kMeshContactsPerSphere * kMaxMeshWalls + sphere);
 }
+// The spring stored under key, or zero (a new contact).
+inline std::array<double, 3> spring_or_zero(const HistoryMap& h, PairKey key) {
+  const auto it = h.find(key);
+  return it == h.end() ? std::array<double, 3>{0, 0, 0} : it->second;
+}
 inline bool is_mesh_key(PairKey k) { return key_high(k) >= kWallKeyBase + kMaxWallSlots; }
 static_assert(kMaxWallSlots + kMeshContactsPerSphere * kMaxMeshWalls + kMaxFreeSpheres <= 1024);
 

@@ -64,7 +64,6 @@ void DemSolver::compute_free_sphere_forces(double dt) {
   for (auto& s : free_) s.force = s.torque = Vec3{};
   const KernelGeometry* g = k_geometry_.data();
   const KernelMotion* mo = k_motion_.data();
-  KernelForce* out = k_force_.data();
   const bool sh = shaped();
   ContactLanes& L = lanes_;
   const ContactCoefficients* sets = coefficient_sets_.data();
@@ -78,12 +77,7 @@ void DemSolver::compute_free_sphere_forces(double dt) {
     evaluate_contacts(model_.law(), L, nb, dt);
     for (std::size_t j = 0; j < nb; ++j) {
       mesh_hist_next_[keys[j]] = {L.hx[j], L.hy[j], L.hz[j]};
-      const std::size_t e = entity[j];
-      const std::size_t body = sh ? static_cast<std::size_t>(e_body_[e]) : e;
-      KernelForce& fo = out[body];
-      fo.fx += L.fx[j], fo.fy += L.fy[j], fo.fz += L.fz[j];
-      fo.tx -= L.nx[j] * L.ra[j], fo.ty -= L.ny[j] * L.ra[j], fo.tz -= L.nz[j] * L.ra[j];
-      if (sh) add_lever(fo, g[e], body, L.fx[j], L.fy[j], L.fz[j]);
+      add_wall_reaction(entity[j], L, j);
       const double rb = L.rb[j];
       mesh_loads_.insert(
           mesh_loads_.end(),
@@ -102,8 +96,7 @@ void DemSolver::compute_free_sphere_forces(double dt) {
     if (sh) element_motion(e);
     const std::int64_t ekey = sh ? e_key_[e] : p_.order[e];
     keys[nb] = free_sphere_key(ekey, b);
-    const auto it = mesh_hist_.find(keys[nb]);
-    const std::array<double, 3> h = it == mesh_hist_.end() ? std::array<double, 3>{0, 0, 0} : it->second;
+    const std::array<double, 3> h = spring_or_zero(mesh_hist_, keys[nb]);
     L.dx[nb] = dx, L.dy[nb] = dy, L.dz[nb] = dz;
     L.ra[nb] = g[e].r, L.rb[nb] = s.radius;
     L.vx[nb] = mo[e].vx - s.v.x, L.vy[nb] = mo[e].vy - s.v.y, L.vz[nb] = mo[e].vz - s.v.z;
@@ -131,13 +124,8 @@ void DemSolver::compute_free_sphere_wall_forces(double dt) {
   free_hist_next_.clear();
   for (std::size_t b = 0; b < free_.size(); ++b) {
     FreeSphere& s = free_[b];
-    struct Touch {
-      PairKey key;
-      Vec3 normal, point;
-      double overlap;
-      int coefficient, mesh;  // mesh -1: a plane
-    };
-    std::vector<Touch> touches;
+    std::vector<FreeTouch>& touches = free_touches_;
+    touches.clear();
     s.touches_wall = false;
     for (std::size_t w = 0; w < prims.size(); ++w) {
       Vec3 n;
@@ -149,8 +137,13 @@ void DemSolver::compute_free_sphere_wall_forces(double dt) {
     }
     for (std::size_t mi = 0; mi < meshes.size(); ++mi) {
       const MeshWall& m = meshes[mi];
-      std::vector<int> all(m.triangles.size());
-      for (std::size_t t = 0; t < all.size(); ++t) all[t] = static_cast<int>(t);
+      // Every triangle is a candidate (a club has a few dozen): ids 0 .. n - 1, made once per mesh.
+      if (triangle_ids_.size() < meshes.size()) triangle_ids_.resize(meshes.size());
+      std::vector<int>& all = triangle_ids_[mi];
+      if (all.size() != m.triangles.size()) {
+        all.resize(m.triangles.size());
+        for (std::size_t t = 0; t < all.size(); ++t) all[t] = static_cast<int>(t);
+      }
       const auto contacts = sphere_mesh_contacts(s.x, s.radius, m.nodes, m.triangles, all);
       for (std::size_t j = 0; j < contacts.size() && j < static_cast<std::size_t>(kMeshContactsPerSphere); ++j)
         touches.push_back({mesh_key(static_cast<std::int64_t>(b), static_cast<int>(mi), static_cast<int>(j)),
@@ -160,20 +153,19 @@ void DemSolver::compute_free_sphere_wall_forces(double dt) {
     for (std::size_t first = 0; first < touches.size(); first += ContactLanes::width) {
       const std::size_t nb = std::min(ContactLanes::width, touches.size() - first);
       for (std::size_t j = 0; j < nb; ++j) {
-        const Touch& t = touches[first + j];
+        const FreeTouch& t = touches[first + j];
         const Vec3 vw = t.mesh >= 0 ? meshes[static_cast<std::size_t>(t.mesh)].velocity_at(t.point) : Vec3{};
         L.dx[j] = t.normal.x, L.dy[j] = t.normal.y, L.dz[j] = t.normal.z;
         L.ra[j] = s.radius, L.rb[j] = t.overlap;
         L.vx[j] = s.v.x - vw.x, L.vy[j] = s.v.y - vw.y, L.vz[j] = s.v.z - vw.z;
         L.wx[j] = s.omega.x * s.radius, L.wy[j] = s.omega.y * s.radius, L.wz[j] = s.omega.z * s.radius;
-        const auto it = free_hist_.find(t.key);
-        const std::array<double, 3> h = it == free_hist_.end() ? std::array<double, 3>{0, 0, 0} : it->second;
+        const std::array<double, 3> h = spring_or_zero(free_hist_, t.key);
         L.hx[j] = h[0], L.hy[j] = h[1], L.hz[j] = h[2];
         for (int q = 0; q < 5; ++q) L.coef[q][j] = sets[t.coefficient].c[q];
       }
       evaluate_wall_contacts(model_.law(), L, nb, dt);
       for (std::size_t j = 0; j < nb; ++j) {
-        const Touch& t = touches[first + j];
+        const FreeTouch& t = touches[first + j];
         free_hist_next_[t.key] = {L.hx[j], L.hy[j], L.hz[j]};
         const Vec3 f{L.fx[j], L.fy[j], L.fz[j]};
         s.force += f;

@@ -599,7 +599,6 @@ void DemSolver::compute_mesh_forces(double dt) {
   for (auto& m : meshes) m.force = m.moment = Vec3{};
   const KernelGeometry* g = k_geometry_.data();
   const KernelMotion* mo = k_motion_.data();
-  KernelForce* out = k_force_.data();
   const bool sh = shaped();
   ContactLanes& L = lanes_;
   const ContactCoefficients* sets = coefficient_sets_.data();
@@ -628,8 +627,7 @@ void DemSolver::compute_mesh_forces(double dt) {
       L.wx[nb] = mo[e].wx * g[e].r, L.wy[nb] = mo[e].wy * g[e].r, L.wz[nb] = mo[e].wz * g[e].r;
       keys[nb] = mesh_key(ekey, mesh_of_[k], static_cast<int>(j));
       points[nb] = tc.point;
-      const auto it = mesh_hist_.find(keys[nb]);
-      const std::array<double, 3> h = it == mesh_hist_.end() ? std::array<double, 3>{0, 0, 0} : it->second;
+      const std::array<double, 3> h = spring_or_zero(mesh_hist_, keys[nb]);
       L.hx[nb] = h[0], L.hy[nb] = h[1], L.hz[nb] = h[2];
       const ContactCoefficients& cs = sets[mesh_coefficient_[k]];
       for (int q = 0; q < 5; ++q) L.coef[q][nb] = cs.c[q];
@@ -638,12 +636,8 @@ void DemSolver::compute_mesh_forces(double dt) {
     evaluate_wall_contacts(model_.law(), L, nb, dt);
     for (std::size_t j = 0; j < nb; ++j) {
       mesh_hist_next_[keys[j]] = {L.hx[j], L.hy[j], L.hz[j]};
-      const std::size_t body = sh ? static_cast<std::size_t>(e_body_[e]) : e;
-      KernelForce& fo = out[body];
+      add_wall_reaction(e, L, j);
       const Vec3 f{L.fx[j], L.fy[j], L.fz[j]};
-      fo.fx += f.x, fo.fy += f.y, fo.fz += f.z;
-      fo.tx -= L.nx[j] * L.ra[j], fo.ty -= L.ny[j] * L.ra[j], fo.tz -= L.nz[j] * L.ra[j];
-      if (sh) add_lever(fo, g[e], body, f.x, f.y, f.z);
       const Vec3 moment = cross(points[j] - m.origin, f);
       loads.insert(loads.end(), {static_cast<double>(keys[j] >> 32), static_cast<double>(keys[j] & 0xffffffffULL),
                                  static_cast<double>(mesh_of_[k]), -f.x, -f.y, -f.z, -moment.x, -moment.y, -moment.z});
@@ -1062,7 +1056,6 @@ void DemSolver::compute_wall_forces(double dt) {
   // Entities are elements (bodies for spheres), read from the kernel mirrors packed this step.
   const KernelGeometry* g = k_geometry_.data();
   const KernelMotion* m = k_motion_.data();
-  KernelForce* out = k_force_.data();
   const bool sh = shaped();
   // Walls: bodies near a wall at the last rebuild, in (body, wall) order; same lanes and law.
   const auto& prims = walls_.primitives();
@@ -1079,11 +1072,7 @@ void DemSolver::compute_wall_forces(double dt) {
       const std::size_t i = wall_body_[k];
       double* h = sh ? &wall_hist_[3 * k] : &p_.wall_history[3 * (i * slots + wall_slot_[k])];
       h[0] = L.hx[j], h[1] = L.hy[j], h[2] = L.hz[j];
-      const std::size_t body = sh ? static_cast<std::size_t>(e_body_[i]) : i;
-      KernelForce& fo = out[body];
-      fo.fx += L.fx[j], fo.fy += L.fy[j], fo.fz += L.fz[j];
-      fo.tx -= L.nx[j] * L.ra[j], fo.ty -= L.ny[j] * L.ra[j], fo.tz -= L.nz[j] * L.ra[j];
-      if (sh) add_lever(fo, g[i], body, L.fx[j], L.fy[j], L.fz[j]);
+      add_wall_reaction(i, L, j);
       wall_force_[wall_slot_[k]] -= Vec3{L.fx[j], L.fy[j], L.fz[j]};
     }
     nb = 0;

@@ -205,6 +205,15 @@ class DemSolver {
   std::vector<KernelGeometry> k_geometry_;
   std::vector<KernelMotion> k_motion_;
   std::vector<KernelForce> k_force_;  // per local body
+  // A wall-type contact's force (lane j: force and n x force) on the body of element e, with the
+  // lever-arm torque in shaped mode.
+  void add_wall_reaction(std::size_t e, const ContactLanes& L, std::size_t j) {
+    const std::size_t body = shaped() ? static_cast<std::size_t>(e_body_[e]) : e;
+    KernelForce& fo = k_force_[body];
+    fo.fx += L.fx[j], fo.fy += L.fy[j], fo.fz += L.fz[j];
+    fo.tx -= L.nx[j] * L.ra[j], fo.ty -= L.ny[j] * L.ra[j], fo.tz -= L.nz[j] * L.ra[j];
+    if (shaped()) add_lever(fo, k_geometry_[e], body, L.fx[j], L.fy[j], L.fz[j]);
+  }
   // Shaped mode: adds the torque (x_e - x_body) x F of an element force to the body's slot.
   void add_lever(KernelForce& f, const KernelGeometry& g, std::size_t body, double fx, double fy, double fz) const;
   bool owned_mirrors_current_ = false;  // k_geometry_/k_motion_ of owned bodies packed by integrate_first
@@ -242,6 +251,14 @@ class DemSolver {
   std::vector<FreeSphere> free_;
   std::vector<std::int32_t> free_entity_, free_of_, free_coefficient_, free_wall_coefficient_;
   HistoryMap free_hist_, free_hist_next_;
+  struct FreeTouch {  // a free sphere's contact with a wall plane (mesh -1) or a mesh
+    PairKey key;
+    Vec3 normal, point;
+    double overlap;
+    int coefficient, mesh;
+  };
+  std::vector<FreeTouch> free_touches_;         // reused each step
+  std::vector<std::vector<int>> triangle_ids_;  // per mesh: 0 .. triangles - 1
   bool mesh_loads_pending_ = false;
   double dt_ = 0, time_ = 0, skin_ = 0, r_max_ = 0, t_contact_ = 0;
   long steps_ = 0;
