@@ -255,4 +255,36 @@ nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolv
   return s;
 }
 
+SettleCriterion::SettleCriterion(const ConfigNode& section, bool required) {
+  if (!required && !section.has("settled_kinetic_energy")) {
+    if (section.has("min_time")) section.fail("min_time", "set only with settled_kinetic_energy");
+    return;
+  }
+  energy_ = section.real("settled_kinetic_energy", Dim::energy, Range::positive());
+  min_time_ = section.real("min_time", Dim::time, Range::non_negative(), 0.0);
+}
+
+bool SettleCriterion::check(const DemStats& s, double time) {
+  if (!settled_ && enabled() && time >= min_time_ && s.kinetic_translational + s.kinetic_rotational < energy_) {
+    settled_ = true;
+    settle_time_ = time;
+  }
+  return settled_;
+}
+
+void SettleCriterion::save(CheckpointExtras& e) const {
+  e["settled"] = settled_ ? 1.0 : 0.0;
+  e["settle_time"] = settle_time_;
+}
+
+void SettleCriterion::restore(const CheckpointExtras& e) {
+  if (e.count("settled")) settled_ = e.at("settled") != 0;
+  if (e.count("settle_time")) settle_time_ = e.at("settle_time");
+}
+
+void SettleCriterion::report(nlohmann::json& q, double time) const {
+  q["settled"] = settled_;
+  q["settle_time"] = settled_ ? settle_time_ : time;
+}
+
 }  // namespace tessera

@@ -64,6 +64,26 @@ class DemScene : public Scene {
   std::string case_dir_;
 };
 
+// When a scene's bodies are at rest: the total kinetic energy below `settled_kinetic_energy` once
+// `min_time` has passed (keys of the scene's section; checked every run.check_interval). The
+// deposition requires it; a bed may set it to end a settling run (the bunker ball's drop) early.
+class SettleCriterion {
+ public:
+  SettleCriterion() = default;
+  SettleCriterion(const ConfigNode& section, bool required);
+  bool enabled() const { return energy_ > 0; }
+  // True once the bodies have settled (and from then on).
+  bool check(const DemStats& s, double time);
+  void save(CheckpointExtras& e) const;
+  void restore(const CheckpointExtras& e);
+  // quantities: settled, settle_time (the time now when not settled).
+  void report(nlohmann::json& q, double time) const;
+
+ private:
+  double energy_ = 0, min_time_ = 0, settle_time_ = 0;
+  bool settled_ = false;
+};
+
 // Builds a dry scene (deposition, bed): for callers that need its DEM (tests, tools).
 std::unique_ptr<DemScene> make_dem_scene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir);
 

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // Bed: runs a bed read from a LAMMPS data file (atom_style sphere) or from a Tessera checkpoint
 // (a file ending in .h5: bodies, shapes, contact histories; the clock restarts at 0) for
-// run.end_time or run.max_steps: the scene the DEM benchmarks time against LAMMPS and LIGGGHTS on the
+// run.end_time or run.max_steps, or until it settles (bed.settled_kinetic_energy, bed.min_time,
+// as a deposition's): the scene the DEM benchmarks time against LAMMPS and LIGGGHTS on the
 // same bed.
 #include <filesystem>
 
@@ -28,6 +29,7 @@ class BedScene final : public DemScene {
       require_pairs(types_);
     }
     if (!end_time_ && !max_steps_) root.section("run").fail("end_time", "run.end_time or run.max_steps");
+    settle_ = SettleCriterion(b, false);
   }
   const char* name() const override { return "bed"; }
 
@@ -41,11 +43,22 @@ class BedScene final : public DemScene {
     }
   }
   bool continues_state() const override { return checkpoint_; }
+  bool finished(const DemStats& s) override { return settle_.check(s, dem_->time()); }
+  void restore(const CheckpointExtras& e) override { settle_.restore(e); }
+  CheckpointExtras extras() const override {
+    CheckpointExtras e;
+    if (settle_.enabled()) settle_.save(e);
+    return e;
+  }
+  void quantities(nlohmann::json& q) override {
+    if (settle_.enabled()) settle_.report(q, dem_->time());
+  }
 
  private:
   std::string file_;
   bool checkpoint_ = false;
   std::vector<int> types_;
+  SettleCriterion settle_;
 };
 
 }  // namespace

@@ -89,8 +89,7 @@ class DepositionScene final : public DemScene {
       d.fail("region_max", "a region holding fewer than 2^32 grains");
     // The first max_grains lattice sites (x fastest, then y, then z), if set.
     max_grains_ = d.integer("max_grains", 1, kMaxBodyId, kMaxBodyId);
-    settled_energy_ = d.real("settled_kinetic_energy", Dim::energy, Range::positive());
-    min_time_ = d.real("min_time", Dim::time, Range::non_negative(), 0.0);
+    settle_ = SettleCriterion(d, true);
     if (!end_time_) root.section("run").fail("end_time", "is required: the longest the deposition may take");
     require_pairs({material_});
   }
@@ -120,19 +119,14 @@ class DepositionScene final : public DemScene {
         }
   }
 
-  bool finished(const DemStats& s) override {
-    const double ke = s.kinetic_translational + s.kinetic_rotational;
-    if (dem_->time() >= min_time_ && ke < settled_energy_) {
-      settled_ = true;
-      settle_time_ = dem_->time();
-    }
-    return settled_;
-  }
+  bool finished(const DemStats& s) override { return settle_.check(s, dem_->time()); }
 
-  void restore(const CheckpointExtras& e) override {
-    if (e.count("settled")) settled_ = e.at("settled") != 0;
+  void restore(const CheckpointExtras& e) override { settle_.restore(e); }
+  CheckpointExtras extras() const override {
+    CheckpointExtras e;
+    settle_.save(e);
+    return e;
   }
-  CheckpointExtras extras() const override { return {{"settled", settled_ ? 1.0 : 0.0}}; }
 
   void finish(const RunOptions& opt) override { write_lammps_data(opt.output_dir + "/bed.data", *dem_); }
 
@@ -177,8 +171,7 @@ class DepositionScene final : public DemScene {
       q["grain_envelope_gap"] = t.envelope.gap;
       q["grain_envelope_overshoot"] = t.envelope.overshoot;
     }
-    q["settled"] = settled_;
-    q["settle_time"] = settled_ ? settle_time_ : dem_->time();
+    settle_.report(q, dem_->time());
     // Floor reaction over the bed's weight: 1 for a hydrostatic bed, below 1 with wall friction (Janssen).
     double floor = 0;
     const auto& prims = dem_->walls().primitives();
@@ -193,11 +186,11 @@ class DepositionScene final : public DemScene {
   Vec3 spacing_;
   bool aligned_ = false;
   long max_grains_ = 0;
-  double diameter_ = 0, spread_ = 0, jitter_ = 0, settled_energy_ = 0, min_time_ = 0, settle_time_ = 0;
+  double diameter_ = 0, spread_ = 0, jitter_ = 0;
+  SettleCriterion settle_;
   std::uint64_t seed_ = 0;
   Vec3 region_lo_, region_hi_;
   long counts_[3] = {0, 0, 0};
-  bool settled_ = false;
 };
 
 }  // namespace

@@ -103,7 +103,8 @@ void write_surface_xdmf(const std::string& path, const std::vector<std::tuple<do
 
 }  // namespace
 
-void SnapshotSeries::write(const DemSolver& dem) {
+void SnapshotSeries::write(DemSolver& dem) {
+  dem.fold_turns();
   // One snapshot per time: a run ending on a snapshot time does not write the same state twice
   // (two grids at one time make ParaView's XDMF reader return an empty multiblock).
   if (!entries_.empty() && entries_.back().time == dem.time()) return;
@@ -169,7 +170,8 @@ void SnapshotSeries::write(const DemSolver& dem) {
   }
 }
 
-void write_checkpoint(const std::string& path, const DemSolver& dem, const CheckpointExtras& extras) {
+void write_checkpoint(const std::string& path, DemSolver& dem, const CheckpointExtras& extras) {
+  dem.fold_turns();
   MPI_Comm comm = dem.decomposition().comm();
   const ParticleStore& p = dem.particles();
   const std::string tmp = path + ".tmp";

@@ -17,8 +17,8 @@ class SnapshotSeries {
   explicit SnapshotSeries(std::string dir) : dir_(std::move(dir)) {}
   // Collective: writes DIR/particles_NNNNNN.h5 and rewrites DIR/particles.xmf; with shaped bodies
   // also DIR/grains.xmf: each body's template surface (triangles) placed at its position and
-  // orientation, so that ParaView draws every grain's shape.
-  void write(const DemSolver& dem);
+  // orientation, so that ParaView draws every grain's shape. Folds plane-mode turns first.
+  void write(DemSolver& dem);
   std::size_t count() const { return entries_.size(); }
 
  private:
@@ -35,8 +35,8 @@ class SnapshotSeries {
 // Extra scalar state a scene keeps in its checkpoint (e.g. its stage), by name.
 using CheckpointExtras = std::map<std::string, double>;
 
-// Collective.
-void write_checkpoint(const std::string& path, const DemSolver& dem, const CheckpointExtras& extras = {});
+// Collective (brings plane-mode orientations up to date first: DemSolver::fold_turns).
+void write_checkpoint(const std::string& path, DemSolver& dem, const CheckpointExtras& extras = {});
 // Collective: loads bodies owned by this rank, the histories and the clock; returns the extras.
 // Call before dem.setup(false).
 CheckpointExtras read_checkpoint(const std::string& path, DemSolver& dem);

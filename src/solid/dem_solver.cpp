@@ -305,6 +305,7 @@ void DemSolver::assign_order() {
 
 void DemSolver::rebuild() {
   owned_mirrors_current_ = false;
+  fold_turns();  // the orientations travel with their bodies
   // Histories that must travel: restart entries, and the pairs of bodies about to leave this rank
   // (the new list takes everything else from the old one by a merge of sorted keys).
   HistoryMap histories = std::move(pending_);
@@ -368,6 +369,7 @@ void DemSolver::rebuild() {
       if (list_.history[3 * k] != 0.0 || list_.history[3 * k + 1] != 0.0 || list_.history[3 * k + 2] != 0.0)
         touching_before_.push_back(static_cast<std::int32_t>(k));
     x_build_.assign(p_.x.begin(), p_.x.begin() + 3 * static_cast<std::ptrdiff_t>(p_.owned));
+    turn_.assign(plane_mode() ? p_.owned : 0, 0.0);
     inv_mass_.resize(p_.owned);
     inv_inertia_.resize(p_.owned);
     wall_body_.clear();
@@ -704,23 +706,8 @@ bool DemSolver::needs_rebuild() {
         max2[0] = std::max(max2[0], d * d);
       }
       max2[1] = max2[0];
-    }
-    const double* x = p_.x.data();
-    const double* x0 = x_build_.data();
-    const std::size_t n = shaped() ? 0 : p_.owned;
-    if (moving && n > 0) {
-      const double* xm = x_moving_build_.data();
-      for (std::size_t k = 0; k < 3 * n; k += 3) {
-        const double dx = x[k] - x0[k], dy = x[k + 1] - x0[k + 1], dz = x[k + 2] - x0[k + 2];
-        const double mx = x[k] - xm[k], my = x[k + 1] - xm[k + 1], mz = x[k + 2] - xm[k + 2];
-        max2[0] = std::max(max2[0], dx * dx + dy * dy + dz * dz);
-        max2[1] = std::max(max2[1], mx * mx + my * my + mz * mz);
-      }
     } else {
-      for (std::size_t k = 0; k < 3 * n; k += 3) {
-        const double dx = x[k] - x0[k], dy = x[k + 1] - x0[k + 1], dz = x[k + 2] - x0[k + 2];
-        max2[0] = std::max(max2[0], dx * dx + dy * dy + dz * dz);
-      }
+      max2[0] = moved2_[0], max2[1] = moved2_[1];  // sphere bodies: found by integrate_first
     }
   }
   auto t = timers_.scope("reduction");
@@ -753,6 +740,48 @@ void DemSolver::find_moving_candidates() {
 }
 
 void DemSolver::integrate_first() {
+  if (shaped())
+    integrate_first_impl<Bodies::shaped>();
+  else if (plane_mode())
+    integrate_first_impl<Bodies::discs>();
+  else
+    integrate_first_impl<Bodies::spheres>();
+}
+
+void DemSolver::fold_turns() {
+  // q <- (cos phi/2, sin phi/2 n) q: the rotation by the turn phi about the plane's normal n, in
+  // the world frame as T8's update (rotations about one axis commute, so the sum of the steps'
+  // turns is exact).
+  if (!plane_mode()) return;
+  const int normal = plane_normal();
+  for (std::size_t i = 0; i < turn_.size() && i < p_.owned; ++i) {
+    if (turn_[i] == 0.0) continue;
+    const double s = std::sin(0.5 * turn_[i]), c = std::cos(0.5 * turn_[i]);
+    Quaternion r{c, 0, 0, 0};
+    (normal == 0 ? r.x : (normal == 1 ? r.y : r.z)) = s;
+    const Quaternion q = r * Quaternion{p_.q[4 * i], p_.q[4 * i + 1], p_.q[4 * i + 2], p_.q[4 * i + 3]};
+    const double scale = 0.5 * (3.0 - q.norm2());
+    p_.q[4 * i] = q.w * scale, p_.q[4 * i + 1] = q.x * scale, p_.q[4 * i + 2] = q.y * scale,
+             p_.q[4 * i + 3] = q.z * scale;
+    turn_[i] = 0.0;
+  }
+}
+
+// Orientation: q <- normalize(q + dt/2 (0, w) q). The update changes |q|^2 by O((w dt)^2), so one
+// Newton step of 1/sqrt about 1 normalises to round-off without a square root.
+static inline void turn_sphere(double* __restrict qi, const double* wi, double h) {
+  const double qw = qi[0], qx = qi[1], qy = qi[2], qz = qi[3];
+  const double a = qw + h * (-wi[0] * qx - wi[1] * qy - wi[2] * qz);
+  const double b = qx + h * (wi[0] * qw + wi[1] * qz - wi[2] * qy);
+  const double c = qy + h * (wi[1] * qw + wi[2] * qx - wi[0] * qz);
+  const double d = qz + h * (wi[2] * qw + wi[0] * qy - wi[1] * qx);
+  const double scale = 0.5 * (3.0 - (a * a + b * b + c * c + d * d));
+  qi[0] = a * scale, qi[1] = b * scale, qi[2] = c * scale, qi[3] = d * scale;
+}
+
+template <DemSolver::Bodies kBodies>
+void DemSolver::integrate_first_impl() {
+  constexpr bool kSpheres = kBodies != Bodies::shaped;
   const double h = 0.5 * dt_, dt = dt_;
   const double g[3] = {settings_.gravity.x, settings_.gravity.y, settings_.gravity.z};
   double* __restrict x = p_.x.data();
@@ -766,9 +795,17 @@ void DemSolver::integrate_first() {
   const std::size_t n = p_.owned;
   const double* vmask = velocity_mask_.data();  // all ones in 3D; plane mode zeroes the normal
   const double* wmask = spin_mask_.data();      // components (multiplying by 1 keeps every bit)
-  // The contact kernel reads the owned bodies from its mirrors: they are written here, from
-  // registers (a rebuild reorders the bodies and repacks everything).
-  owned_mirrors_current_ = !shaped() && k_geometry_.size() >= n && k_motion_.size() >= n;
+  // Sphere bodies, in the same pass (from registers): the contact kernel's mirrors of the owned
+  // bodies (a rebuild reorders the bodies and repacks everything), the orientation, and the
+  // largest displacements since the list build and the moving walls' search (needs_rebuild).
+  // Discs (plane mode) turn about the normal only: the step adds dt w_n to their turn, which
+  // fold_turns applies to q at the next rebuild or output (a 2D orientation is one angle).
+  double* __restrict turn = turn_.data();
+  const int normal = std::max(0, plane_normal());
+  owned_mirrors_current_ = kSpheres && k_geometry_.size() >= n && k_motion_.size() >= n;
+  const double* x0 = x_build_.data();
+  const double* xm = x_moving_build_.data();
+  double moved2 = 0, moved_since_walls2 = 0;
   for (std::size_t i = 0; i < n; ++i) {
     // The body arrays are page-aligned allocations of equal size: a store to v[j] followed by a
     // load of x[j] would stall (4K aliasing). Load a body's values first, then store.
@@ -780,27 +817,30 @@ void DemSolver::integrate_first() {
       xi[k] = x[3 * i + k] + dt * vi[k];
     }
     for (int k = 0; k < 3; ++k) v[3 * i + k] = vi[k], w[3 * i + k] = wi[k], x[3 * i + k] = xi[k];
-    if (owned_mirrors_current_) {
-      k_geometry_[i] = {xi[0], xi[1], xi[2], p_.radius[i]};
-      k_motion_[i] = {vi[0], vi[1], vi[2], wi[0], wi[1], wi[2]};
+    if constexpr (kSpheres) {
+      if (owned_mirrors_current_) {
+        k_geometry_[i] = {xi[0], xi[1], xi[2], p_.radius[i]};
+        k_motion_[i] = {vi[0], vi[1], vi[2], wi[0], wi[1], wi[2]};
+      }
+      if constexpr (kBodies == Bodies::discs)
+        turn[i] += dt * wi[normal];
+      else
+        turn_sphere(q + 4 * i, wi, h);
+      const double dx = xi[0] - x0[3 * i], dy = xi[1] - x0[3 * i + 1], dz = xi[2] - x0[3 * i + 2];
+      const double mx = xi[0] - xm[3 * i], my = xi[1] - xm[3 * i + 1], mz = xi[2] - xm[3 * i + 2];
+      moved2 = std::max(moved2, dx * dx + dy * dy + dz * dz);
+      moved_since_walls2 = std::max(moved_since_walls2, mx * mx + my * my + mz * mz);
     }
   }
-  // Orientation: q <- normalize(q + dt/2 (0, w) q). The update changes |q|^2 by O((w dt)^2), so one
-  // Newton step of 1/sqrt about 1 normalises to round-off without a square root.
-  for (std::size_t i = 0; i < n; ++i) {
-    if (anisotropic(p_.shape[i])) {
-      rotate_shaped(i, t + 3 * i, h, dt);
-      continue;
+  if constexpr (kSpheres) {
+    moved2_[0] = moved2, moved2_[1] = moved_since_walls2;
+  } else {
+    for (std::size_t i = 0; i < n; ++i) {
+      if (anisotropic(p_.shape[i]))
+        rotate_shaped(i, t + 3 * i, h, dt);
+      else
+        turn_sphere(q + 4 * i, w + 3 * i, h);
     }
-    double* qi = q + 4 * i;
-    const double* wi = w + 3 * i;
-    const double qw = qi[0], qx = qi[1], qy = qi[2], qz = qi[3];
-    const double a = qw + h * (-wi[0] * qx - wi[1] * qy - wi[2] * qz);
-    const double b = qx + h * (wi[0] * qw + wi[1] * qz - wi[2] * qy);
-    const double c = qy + h * (wi[1] * qw + wi[2] * qx - wi[0] * qz);
-    const double d = qz + h * (wi[2] * qw + wi[0] * qy - wi[1] * qx);
-    const double scale = 0.5 * (3.0 - (a * a + b * b + c * c + d * d));
-    qi[0] = a * scale, qi[1] = b * scale, qi[2] = c * scale, qi[3] = d * scale;
   }
 }
 
@@ -1203,6 +1243,13 @@ DemStats DemSolver::stats() const {
   MPI_Allreduce(MPI_IN_PLACE, c, 5, MPI_LONG, MPI_SUM, comm);
   if (!std::isfinite(worst.ratio)) worst.ratio = 1e300;
   MPI_Allreduce(MPI_IN_PLACE, &worst, 1, MPI_DOUBLE_INT, MPI_MAXLOC, comm);
+  // Free spheres are held on every rank: counted once, after the sums.
+  for (const FreeSphere& fs : free_) {
+    if (!std::isfinite(norm2(fs.x) + norm2(fs.v) + norm2(fs.omega))) ++c[3];
+    e[0] += 0.5 * fs.mass * norm2(fs.v);
+    e[1] += 0.5 * fs.inertia * norm2(fs.omega);
+    e[2] = std::max(e[2], norm(fs.v));
+  }
   DemStats s;
   s.bodies = c[0];
   s.contacts = c[1];

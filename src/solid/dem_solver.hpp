@@ -59,7 +59,7 @@ struct DemSettings {
 
 struct DemStats {
   long bodies = 0;
-  double kinetic_translational = 0, kinetic_rotational = 0;
+  double kinetic_translational = 0, kinetic_rotational = 0;  // bodies and free spheres
   double max_speed = 0;
   long contacts = 0;             // touching element pairs (bodies; contact spheres of shaped bodies)
   long body_contacts = 0;        // touching body pairs (one per pair however many spheres touch)
@@ -74,7 +74,10 @@ class DemSolver {
   DemSolver(const Decomposition& decomp, ContactModel model, Walls walls, DemSettings settings);
 
   ParticleStore& particles() { return p_; }
+  // Plane mode: the discs' orientations (q) are brought up to date at each list rebuild and by
+  // fold_turns(), which writers of q (snapshots, checkpoints) call first.
   const ParticleStore& particles() const { return p_; }
+  void fold_turns();
   const ContactModel& model() const { return model_; }
   const Walls& walls() const { return walls_; }
   Walls& walls() { return walls_; }
@@ -148,6 +151,9 @@ class DemSolver {
   template <class Law>
   void fill_pair_coefficients();
   void integrate_first();
+  enum class Bodies { shaped, spheres, discs };
+  template <Bodies kBodies>
+  void integrate_first_impl();
   void integrate_second();
   void sort_owned_by_order();
   void assign_order();
@@ -216,6 +222,8 @@ class DemSolver {
   }
   // Shaped mode: adds the torque (x_e - x_body) x F of an element force to the body's slot.
   void add_lever(KernelForce& f, const KernelGeometry& g, std::size_t body, double fx, double fy, double fz) const;
+  std::vector<double> turn_;            // plane mode: each owned disc's turn about the normal since fold_turns
+  double moved2_[2] = {0, 0};           // sphere bodies: squared largest displacements (see needs_rebuild)
   bool owned_mirrors_current_ = false;  // k_geometry_/k_motion_ of owned bodies packed by integrate_first
   // Law coefficients: a table of the distinct sets (one per material pair for equal bodies) and,
   // per listed pair, an index into it: 4 bytes per pair to stream instead of 40.

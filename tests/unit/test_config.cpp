@@ -175,5 +175,36 @@ TEST(Config, ShippedCaseFilesAreValid) {
   EXPECT_GE(checked, 2);
 }
 
+// A bed run may end when it settles: bed.min_time means nothing without bed.settled_kinetic_energy.
+TEST(Config, BedSettleKeysComeTogether) {
+  const std::string fixture = std::filesystem::absolute(bed_fixture()).string();
+  const std::string bed = R"(
+scene: bed
+domain: {box_min: [0, 0, 0], box_max: [0.32, 0.0019, 0.15]}
+solid:
+  plane: {normal: y, thickness: 1.9 mm}
+  materials: {sand: {density: 2480}, ball: {density: 1000}}
+  contact:
+    law: hooke
+    pairs:
+      - {materials: [sand, sand], normal_stiffness: 1e5, restitution: 0.5, friction: 0.25}
+      - {materials: [sand, ball], normal_stiffness: 1e5, restitution: 0.5, friction: 0.2}
+bed: {file: none.h5}
+run: {end_time: 0.001}
+)";
+  auto error = [&](std::vector<std::string> sets) {
+    sets.push_back("bed.file=" + fixture);
+    return error_of([&] {
+      Config c = Config::parse(bed, sets);
+      auto s = make_scene(c.root(), MPI_COMM_WORLD, ".");
+      c.check_unused();
+    });
+  };
+  EXPECT_EQ(error({}), "");
+  EXPECT_EQ(error({"bed.settled_kinetic_energy=1e-7 J", "bed.min_time=2 ms"}), "");
+  EXPECT_NE(error({"bed.min_time=2 ms"}).find("bed.min_time"), std::string::npos);
+  EXPECT_NE(error({"bed.settled_kinetic_energy=-1 J"}).find("bed.settled_kinetic_energy"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace tessera

@@ -140,7 +140,8 @@ run: {end_time: 0.2 s, check_interval: 2 ms}
   const std::string ball_line =
       "  free_spheres:\n    - {key: ball, material: ball, diameter: 16 mm, position: [30 mm, 0, 30 mm]}\n";
   const std::string drop = "scene: bed\n" + domain + solid + ball_line +
-                           "bed: {file: toy_bunker_bed/checkpoint.h5}\nrun: {end_time: 40 ms, check_interval: 2 ms}\n";
+                           "bed: {file: toy_bunker_bed/checkpoint.h5, settled_kinetic_energy: 1e-8 J, min_time: 10 ms}\n"
+                           "run: {end_time: 0.2 s, check_interval: 2 ms}\n";
   const std::string shot = "scene: bunker_shot\n" + domain + solid + ball_line + R"(
 bed: {file: toy_bunker_ball/checkpoint.h5}
 club: {loft_deg: 58, bounce_deg: 10, shot_depth: 1 mm, shaft_length: 100 mm, angular_velocity: 50 rad/s,
@@ -148,7 +149,8 @@ club: {loft_deg: 58, bounce_deg: 10, shot_depth: 1 mm, shaft_length: 100 mm, ang
 run: {end_time: 8 ms, check_interval: 0.5 ms}
 )";
   run_case_on(2, bed, {}, "toy_bunker_bed");
-  run_case_on(2, drop, {}, "toy_bunker_ball");
+  // The drop ends when the ball and bed are at rest (bed.settled_kinetic_energy), well before 0.2 s.
+  const auto dropped = run_case_on(2, drop, {}, "toy_bunker_ball");
   const auto one = run_case_on(1, shot, {}, "toy_bunker_shot_1");
   const auto two = run_case_on(2, shot, {"domain.process_grid=[2,1,1]"}, "toy_bunker_shot_2");
   const auto four = run_case_on(4, shot, {"domain.process_grid=[4,1,1]"}, "toy_bunker_shot_4");
@@ -158,6 +160,10 @@ run: {end_time: 8 ms, check_interval: 0.5 ms}
   const auto resumed = run_case_on(2, shot, {"domain.process_grid=[2,1,1]"}, "toy_bunker_shot_r",
                                    std::string("toy_bunker_shot_r/checkpoint.h5"));
   if (world_rank() != 0) return;
+  std::printf("toy drop: settled at %.4g s\n", dropped["quantities"]["settle_time"].get<double>());
+  EXPECT_TRUE(dropped["quantities"]["settled"].get<bool>());
+  EXPECT_LT(dropped["time"].get<double>(), 0.19);
+  EXPECT_LT(dropped["quantities"]["kinetic_energy"].get<double>(), 1e-8);
   const auto& q = one["quantities"];
   std::printf("toy shot: release %.3f deg at %.4f m/s (t = %.4g s), impulse %.4g, club loses %.3f rad/s\n",
               q["release_angle_deg"].get<double>(), q["release_speed_mps"].get<double>(),
