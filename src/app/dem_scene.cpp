@@ -137,10 +137,13 @@ nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolv
   while (true) {
     if (end_time_ && dem_->time() >= *end_time_ - 0.5 * dem_->dt()) break;
     if (max_steps_ && dem_->steps() >= *max_steps_) break;
-    dem_->step();
+    // The second half-kick of the bodies waits for the next step's first pass (one sweep over the
+    // bodies instead of two); anything below that reads body state completes the step first.
+    dem_->step(true);
     after_step(opt);
     if (dem_->time() >= next_check - 0.5 * dem_->dt()) {
       next_check += check_interval_;
+      dem_->complete_step();
       stats = dem_->stats();
       check_health(stats, opt);
       if (finished(stats)) break;
@@ -163,6 +166,7 @@ nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolv
       }
       if (poll.progress) {
         last_progress = wall();
+        dem_->complete_step();
         stats = dem_->stats();
         if (root && !opt.quiet) {
           const double rate = static_cast<double>(dem_->steps() - start_steps) / std::max(1e-9, wall());
@@ -176,6 +180,7 @@ nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolv
       }
     }
   }
+  dem_->complete_step();
   MPI_Barrier(comm);
   loop_seconds = wall() - loop_start;
   {

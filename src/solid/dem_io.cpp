@@ -104,7 +104,7 @@ void write_surface_xdmf(const std::string& path, const std::vector<std::tuple<do
 }  // namespace
 
 void SnapshotSeries::write(DemSolver& dem) {
-  dem.fold_turns();
+  dem.complete_step();
   // One snapshot per time: a run ending on a snapshot time does not write the same state twice
   // (two grids at one time make ParaView's XDMF reader return an empty multiblock).
   if (!entries_.empty() && entries_.back().time == dem.time()) return;
@@ -171,7 +171,7 @@ void SnapshotSeries::write(DemSolver& dem) {
 }
 
 void write_checkpoint(const std::string& path, DemSolver& dem, const CheckpointExtras& extras) {
-  dem.fold_turns();
+  dem.complete_step();
   MPI_Comm comm = dem.decomposition().comm();
   const ParticleStore& p = dem.particles();
   const std::string tmp = path + ".tmp";

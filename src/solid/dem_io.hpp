@@ -17,7 +17,7 @@ class SnapshotSeries {
   explicit SnapshotSeries(std::string dir) : dir_(std::move(dir)) {}
   // Collective: writes DIR/particles_NNNNNN.h5 and rewrites DIR/particles.xmf; with shaped bodies
   // also DIR/grains.xmf: each body's template surface (triangles) placed at its position and
-  // orientation, so that ParaView draws every grain's shape. Folds plane-mode turns first.
+  // orientation, so that ParaView draws every grain's shape. Completes the step first (DemSolver::complete_step).
   void write(DemSolver& dem);
   std::size_t count() const { return entries_.size(); }
 
@@ -35,7 +35,7 @@ class SnapshotSeries {
 // Extra scalar state a scene keeps in its checkpoint (e.g. its stage), by name.
 using CheckpointExtras = std::map<std::string, double>;
 
-// Collective (brings plane-mode orientations up to date first: DemSolver::fold_turns).
+// Collective. Completes the step first (DemSolver::complete_step).
 void write_checkpoint(const std::string& path, DemSolver& dem, const CheckpointExtras& extras = {});
 // Collective: loads bodies owned by this rank, the histories and the clock; returns the extras.
 // Call before dem.setup(false).

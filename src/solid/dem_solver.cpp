@@ -806,14 +806,28 @@ void DemSolver::integrate_first_impl() {
   const double* x0 = x_build_.data();
   const double* xm = x_moving_build_.data();
   double moved2 = 0, moved_since_walls2 = 0;
+  // A deferred second half-kick (step(true)) comes first, with the forces from the contact buffer.
+  const bool both = kSpheres && kick_pending_;
+  kick_pending_ = false;
+  const KernelForce* __restrict kf = k_force_.data();
   for (std::size_t i = 0; i < n; ++i) {
     // The body arrays are page-aligned allocations of equal size: a store to v[j] followed by a
     // load of x[j] would stall (4K aliasing). Load a body's values first, then store.
     const double a = inv_m[i], b = inv_i[i];
-    double vi[3], wi[3], xi[3];
+    double vi[3], wi[3], xi[3], fi[3], ti[3];
+    for (int k = 0; k < 3; ++k) vi[k] = v[3 * i + k], wi[k] = w[3 * i + k];
+    if (both) {
+      fi[0] = kf[i].fx, fi[1] = kf[i].fy, fi[2] = kf[i].fz, ti[0] = kf[i].tx, ti[1] = kf[i].ty, ti[2] = kf[i].tz;
+      for (int k = 0; k < 3; ++k) {
+        vi[k] = (vi[k] + h * (fi[k] * a + g[k])) * vmask[k];
+        wi[k] = (wi[k] + h * ti[k] * b) * wmask[k];
+      }
+    } else {
+      for (int k = 0; k < 3; ++k) fi[k] = f[3 * i + k], ti[k] = t[3 * i + k];
+    }
     for (int k = 0; k < 3; ++k) {
-      vi[k] = (v[3 * i + k] + h * (f[3 * i + k] * a + g[k])) * vmask[k];
-      wi[k] = (w[3 * i + k] + h * t[3 * i + k] * b) * wmask[k];
+      vi[k] = (vi[k] + h * (fi[k] * a + g[k])) * vmask[k];
+      wi[k] = (wi[k] + h * ti[k] * b) * wmask[k];
       xi[k] = x[3 * i + k] + dt * vi[k];
     }
     for (int k = 0; k < 3; ++k) v[3 * i + k] = vi[k], w[3 * i + k] = wi[k], x[3 * i + k] = xi[k];
@@ -1144,7 +1158,16 @@ void DemSolver::compute_wall_forces(double dt) {
   if (nb) flush();
 }
 
-void DemSolver::step() {
+void DemSolver::complete_step() {
+  if (kick_pending_) {
+    auto t = timers_.scope("integrate");
+    integrate_second();
+    kick_pending_ = false;
+  }
+  fold_turns();
+}
+
+void DemSolver::step(bool defer_kick) {
   {
     auto t = timers_.scope("integrate");
     integrate_first();
@@ -1168,7 +1191,10 @@ void DemSolver::step() {
   compute_forces(true);
   {
     auto t = timers_.scope("integrate");
-    integrate_second();
+    if (defer_kick && !shaped())
+      kick_pending_ = true;
+    else
+      integrate_second();
     kick_free_spheres(false);
     for (auto& m : walls_.meshes()) {
       m.update_acceleration(settings_.gravity);
@@ -1186,6 +1212,7 @@ void DemSolver::step() {
 }
 
 DemStats DemSolver::stats() const {
+  if (kick_pending_) throw std::logic_error("DemSolver::stats: a deferred half-kick is pending (complete_step)");
   double e[3] = {0, 0, 0};
   long c[5] = {static_cast<long>(p_.owned), 0, 0, 0, 0};  // bodies, contacts, wall contacts, non-finite, body pairs
   struct {

@@ -7,7 +7,8 @@
 //   ghost_comm        otherwise: refresh ghost x, v, w
 //   contact_forces    pairs in canonical order (T1-T4), then walls (T7)
 //   integrate_second  v += dt/2 (F/m + g), w += dt/2 T/I                                   (T8)
-//                     (F, T taken from the contact buffer and stored with the body)
+//                     (F, T taken from the contact buffer and stored with the body; step(true)
+//                     defers it to the next integrate_first, which then applies both kicks)
 //
 // Velocity Verlet (LAMMPS nve/sphere), second order for conservative forces; the damping and
 // history terms see the half-step velocity.
@@ -75,9 +76,8 @@ class DemSolver {
 
   ParticleStore& particles() { return p_; }
   // Plane mode: the discs' orientations (q) are brought up to date at each list rebuild and by
-  // fold_turns(), which writers of q (snapshots, checkpoints) call first.
+  // complete_step(), which writers of q (snapshots, checkpoints) call first.
   const ParticleStore& particles() const { return p_; }
-  void fold_turns();
   const ContactModel& model() const { return model_; }
   const Walls& walls() const { return walls_; }
   Walls& walls() { return walls_; }
@@ -113,7 +113,15 @@ class DemSolver {
   // Collective. fresh = true computes the forces of the initial state (histories untouched);
   // false keeps the forces stored in the bodies (restart).
   void setup(bool fresh = true);
-  void step();
+  // One step. defer_kick = true (sphere bodies; ignored with shaped ones) leaves the step's second
+  // half-kick of the bodies to the next step's first pass, which applies both kicks (the same
+  // forces, the same operations: the same bits) in one sweep over the bodies instead of two. Until
+  // complete_step() or the next step, the bodies' v and w are those of the half step: a caller
+  // that defers calls complete_step() before reading body state (stats() refuses; the snapshot
+  // and checkpoint writers call it). The club, the ball and mesh walls are always complete.
+  void step(bool defer_kick = false);
+  // Applies a deferred half-kick and folds the plane-mode turns into q (both idempotent).
+  void complete_step();
 
   double dt() const { return dt_; }
   double time() const { return time_; }
@@ -222,6 +230,8 @@ class DemSolver {
   }
   // Shaped mode: adds the torque (x_e - x_body) x F of an element force to the body's slot.
   void add_lever(KernelForce& f, const KernelGeometry& g, std::size_t body, double fx, double fy, double fz) const;
+  void fold_turns();
+  bool kick_pending_ = false;           // step(true): the second half-kick waits in k_force_ (see step)
   std::vector<double> turn_;            // plane mode: each owned disc's turn about the normal since fold_turns
   double moved2_[2] = {0, 0};           // sphere bodies: squared largest displacements (see needs_rebuild)
   bool owned_mirrors_current_ = false;  // k_geometry_/k_motion_ of owned bodies packed by integrate_first

@@ -139,9 +139,10 @@ run: {end_time: 0.2 s, check_interval: 2 ms}
 )";
   const std::string ball_line =
       "  free_spheres:\n    - {key: ball, material: ball, diameter: 16 mm, position: [30 mm, 0, 30 mm]}\n";
-  const std::string drop = "scene: bed\n" + domain + solid + ball_line +
-                           "bed: {file: toy_bunker_bed/checkpoint.h5, settled_kinetic_energy: 1e-8 J, min_time: 10 ms}\n"
-                           "run: {end_time: 0.2 s, check_interval: 2 ms}\n";
+  const std::string drop =
+      "scene: bed\n" + domain + solid + ball_line +
+      "bed: {file: toy_bunker_bed/checkpoint.h5, settled_kinetic_energy: 1e-8 J, min_time: 10 ms}\n"
+      "run: {end_time: 0.2 s, check_interval: 2 ms}\n";
   const std::string shot = "scene: bunker_shot\n" + domain + solid + ball_line + R"(
 bed: {file: toy_bunker_ball/checkpoint.h5}
 club: {loft_deg: 58, bounce_deg: 10, shot_depth: 1 mm, shaft_length: 100 mm, angular_velocity: 50 rad/s,

@@ -50,10 +50,10 @@ double rolling_acceleration(bool plane, double theta, double& mass) {
     EXPECT_EQ(p.v[1], 0.0);
     EXPECT_EQ(p.omega[0], 0.0);
     EXPECT_EQ(p.omega[2], 0.0);
-    // The disc's orientation (its turns folded into q) is a rotation about y by the distance
+    // The disc's orientation (its turns folded into q by complete_step) is a rotation about y by the distance
     // rolled over R: rolling without slip, up to the tangential spring's and the overlap's
     // share (about 1e-5 rad here).
-    rig.dem->fold_turns();
+    rig.dem->complete_step();
     const double turned = 2 * std::atan2(p.q[2], p.q[0]);
     std::printf("disc turned %.6f rad, rolled %.6f radii\n", turned, p.x[0] / R);
     EXPECT_NEAR(turned, p.x[0] / R, 1e-4);
