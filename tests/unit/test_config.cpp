@@ -120,11 +120,8 @@ TEST(Config, InconsistentInputIsCaughtBeforeAnyWork) {
   EXPECT_NE(scene_error({"solid.frobnicate=1"}).find("solid.frobnicate"), std::string::npos);
 }
 
-// A stand-in for the checkpoint a case reads from an earlier run (the bunker cases' bed.file): two
-// discs and a free sphere in plane mode, so that the scene can be built without that run.
-std::string bed_fixture() {
-  const std::string path = "shipped_case_bed_fixture.h5";
-  Config c = Config::parse(R"(
+// A bed scene in plane mode with a free sphere (the bunker cases' kind).
+const char* kBedCase = R"(
 scene: bed
 domain: {box_min: [0, 0, 0], box_max: [0.32, 0.0019, 0.15]}
 solid:
@@ -139,7 +136,13 @@ solid:
     - {key: ball, material: ball, diameter: 43 mm, position: [0.16, 0, 0.12]}
 bed: {file: none.h5}
 run: {end_time: 0.001}
-)");
+)";
+
+// A stand-in for the checkpoint a case reads from an earlier run (the bunker cases' bed.file): two
+// discs and a free sphere in plane mode, so that the scene can be built without that run.
+std::string bed_fixture() {
+  const std::string path = "shipped_case_bed_fixture.h5";
+  Config c = Config::parse(kBedCase);
   Decomposition d(MPI_COMM_WORLD, {0, 0, 0}, {0.32, 0.0019, 0.15});
   DemSettings st = DemSettings::from_config(c.root().section("solid"));
   DemSolver dem(d, ContactModel(c.root().section("solid")), Walls(), st);
@@ -178,24 +181,10 @@ TEST(Config, ShippedCaseFilesAreValid) {
 // A bed run may end when it settles: bed.min_time means nothing without bed.settled_kinetic_energy.
 TEST(Config, BedSettleKeysComeTogether) {
   const std::string fixture = std::filesystem::absolute(bed_fixture()).string();
-  const std::string bed = R"(
-scene: bed
-domain: {box_min: [0, 0, 0], box_max: [0.32, 0.0019, 0.15]}
-solid:
-  plane: {normal: y, thickness: 1.9 mm}
-  materials: {sand: {density: 2480}, ball: {density: 1000}}
-  contact:
-    law: hooke
-    pairs:
-      - {materials: [sand, sand], normal_stiffness: 1e5, restitution: 0.5, friction: 0.25}
-      - {materials: [sand, ball], normal_stiffness: 1e5, restitution: 0.5, friction: 0.2}
-bed: {file: none.h5}
-run: {end_time: 0.001}
-)";
   auto error = [&](std::vector<std::string> sets) {
     sets.push_back("bed.file=" + fixture);
     return error_of([&] {
-      Config c = Config::parse(bed, sets);
+      Config c = Config::parse(kBedCase, sets);
       auto s = make_scene(c.root(), MPI_COMM_WORLD, ".");
       c.check_unused();
     });
