@@ -1037,9 +1037,11 @@ void DemSolver::compute_pair_forces(double dt, bool update_history) {
   // which a branch would mispredict). The compacted list keeps the canonical order.
   touching_.resize(np);
   std::size_t nt = 0;
-  constexpr std::size_t ahead = 16;  // prefetch distance: partners are scattered over ~1000 bodies
+  // Prefetch distances: partners are scattered over ~1000 bodies, and a large bed's mirrors come
+  // from memory. Pass 1 spends a few ns a pair, so it looks further ahead than pass 2.
+  constexpr std::size_t ahead = 16, ahead1 = 64;
   for (std::size_t k = 0; k < np; ++k) {
-    if (k + ahead < np) __builtin_prefetch(&g[second[k + ahead]]);
+    if (k + ahead1 < np) __builtin_prefetch(&g[second[k + ahead1]]);
     const KernelGeometry& a = g[first[k]];
     const KernelGeometry& b = g[second[k]];
     const double dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z, rsum = a.r + b.r;
@@ -1067,10 +1069,14 @@ void DemSolver::compute_pair_forces(double dt, bool update_history) {
     const std::size_t nb = std::min(B, nt - s);
     for (std::size_t j = 0; j < nb; ++j) {
       if (s + j + ahead < nt) {
+        // The partner's lines (pass 1 read its geometry long ago: a large bed's mirrors leave the
+        // cache in between), the pair's history and its coefficient set.
         const std::size_t kk = static_cast<std::size_t>(touching_[s + j + ahead]);
+        __builtin_prefetch(&g[second[kk]]);
         __builtin_prefetch(&m[second[kk]]);
         __builtin_prefetch(&out[second[kk]], 1);
         __builtin_prefetch(&hist[3 * kk], 1);
+        __builtin_prefetch(&sets[pc[kk]]);
       }
       const std::size_t k = static_cast<std::size_t>(touching_[s + j]);
       const std::size_t a = first[k], b = second[k];
