@@ -118,8 +118,7 @@ def main():
         s = shots[0]
 
         def stat(key):
-            v = [x["quantities"][key] for x in shots]
-            return ensemble_stats(v)
+            return ensemble_stats([x["quantities"][key] for x in shots])
         angle, speed = stat("release_angle_deg"), stat("release_speed_mps")
         impulse = stat("club_upward_impulse")
         speeds = [x["quantities"]["release_speed_mps"] for x in shots]
@@ -128,8 +127,8 @@ def main():
             row.update({name + "_mean": st["mean"], name + "_mean_stderr": st["mean_stderr"], name + "_sd": st["sd"],
                         name + "_median": st["median"], name + "_median_stderr": st["median_stderr"]})
         row["club_upward_impulse"] = impulse["mean"]
-        # The fast tail: shots released more than 15 % faster than the ensemble's median (the club's
-        # edge reaching the ball, a flatter and faster release: see docs/validation.md).
+        # The fast tail: shots released more than 15 % faster than the ensemble's median, a rare second
+        # outcome whose mechanism is not identified (docs/validation.md).
         row["fast_tail"] = sum(1 for v in speeds if v > 1.15 * speed["median"])
         rows.append(row)
         print("k_n %-8g dt %.3g s  %7d steps  %6.1f s  release mean %.2f +- %.2f deg %.3f +- %.3f m/s, median "
