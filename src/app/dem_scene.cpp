@@ -210,10 +210,13 @@ nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolv
   s["dt"] = dem_->dt();
   s["contact_law"] = dem_->model().law_name();
   s["neighbor_list_builds"] = dem_->list_builds();
-  long counts[2] = {static_cast<long>(dem_->pair_count()), static_cast<long>(dem_->halo_bytes_sent())};
-  MPI_Allreduce(MPI_IN_PLACE, counts, 2, MPI_LONG, MPI_SUM, comm);
+  long counts[3] = {static_cast<long>(dem_->pair_count()), static_cast<long>(dem_->halo_bytes_sent()),
+                    static_cast<long>(dem_->migrations())};
+  MPI_Allreduce(MPI_IN_PLACE, counts, 3, MPI_LONG, MPI_SUM, comm);
   s["listed_pairs"] = counts[0];     // contact-list entries over all ranks at the end
   s["halo_bytes_sent"] = counts[1];  // ghost and migration traffic, all ranks, this run
+  s["migrations"] = counts[2];       // bodies that changed owner, this run
+  s["cross_rank_contacts"] = stats.cross_rank_contacts;  // touching pairs across rank boundaries, at the end
   double wall_s = wall();
   MPI_Bcast(&wall_s, 1, MPI_DOUBLE, 0, comm);
   s["wall_seconds"] = wall_s;

@@ -13,6 +13,7 @@
 #include "app/dem_scene.hpp"
 #include "app/scenes.hpp"
 #include "core/errors.hpp"
+#include "core/exact_sum.hpp"
 
 namespace tessera {
 
@@ -146,22 +147,22 @@ class DepositionScene final : public DemScene {
     const int normal = dem_->plane_normal();
     const double ax = normal == 0 ? 1.0 : (hi.x - lo.x) - 4 * d, ay = normal == 1 ? 1.0 : (hi.y - lo.y) - 4 * d;
     const double mx = normal == 0 ? -1e300 : 2 * d, my = normal == 1 ? -1e300 : 2 * d;
-    double solid = 0, weight = 0;
+    ExactSum sums[2];  // solid volume, weight: exact sums, the same bits on any rank count
     for (std::size_t i = 0; i < p.owned; ++i) {
       const Vec3 x = p.pos(i);
-      weight += p.mass[i];
+      sums[1] += p.mass[i];
       if (x.x < lo.x + mx || x.x > hi.x - mx || x.y < lo.y + my || x.y > hi.y - my) continue;
       if (x.z < z0 || x.z >= z1) continue;
       if (normal >= 0)
-        solid += std::numbers::pi * p.radius[i] * p.radius[i];
+        sums[0] += std::numbers::pi * p.radius[i] * p.radius[i];
       else
-        solid += p.shape[i] > 0 ? p.mass[i] / dem_->model().materials()[p.material[i]].density
-                                : 4.0 / 3.0 * std::numbers::pi * std::pow(p.radius[i], 3);
+        sums[0] += p.shape[i] > 0 ? p.mass[i] / dem_->model().materials()[p.material[i]].density
+                                  : 4.0 / 3.0 * std::numbers::pi * std::pow(p.radius[i], 3);
     }
-    double sums[2] = {solid, weight};
-    MPI_Allreduce(MPI_IN_PLACE, sums, 2, MPI_DOUBLE, MPI_SUM, comm);
+    ExactSum::all_reduce(sums, comm);
+    const double solid = sums[0].value(), weight = sums[1].value();
     const double sample = ax * ay * (z1 - z0);
-    q["packing_fraction"] = (ax > 0 && ay > 0 && z1 > z0) ? sums[0] / sample : 0.0;
+    q["packing_fraction"] = (ax > 0 && ay > 0 && z1 > z0) ? solid / sample : 0.0;
     q["bed_height"] = z_top + 0.5 * d - z_floor;
     if (shape_ > 0) {
       const ShapeTemplate& t = dem_->shapes()[shape_ - 1];
@@ -175,10 +176,10 @@ class DepositionScene final : public DemScene {
     // Floor reaction over the bed's weight: 1 for a hydrostatic bed, below 1 with wall friction (Janssen).
     double floor = 0;
     const auto& prims = dem_->walls().primitives();
+    const std::vector<Vec3> wall_forces = dem_->wall_forces();  // collective, summed over ranks
     for (std::size_t k = 0; k < prims.size(); ++k)
-      if (prims[k].kind == WallPrimitive::Kind::plane && prims[k].normal.z > 0.99) floor -= dem_->wall_forces()[k].z;
-    MPI_Allreduce(MPI_IN_PLACE, &floor, 1, MPI_DOUBLE, MPI_SUM, comm);
-    q["floor_force_over_weight"] = floor / (sums[1] * norm(dem_->gravity()));
+      if (prims[k].kind == WallPrimitive::Kind::plane && prims[k].normal.z > 0.99) floor -= wall_forces[k].z;
+    q["floor_force_over_weight"] = floor / (weight * norm(dem_->gravity()));
   }
 
  private:

@@ -291,11 +291,14 @@ CheckpointExtras read_checkpoint(const std::string& path, DemSolver& dem) {
         "a checkpoint made with the same walls as this case (" + std::to_string(p.wall_slots) + " wall primitives)");
   int cols = 0;
   const auto state = f.read_all<double>("bodies", cols);
-  if (cols != p.packed_size()) throw InputError("restart", path, "a checkpoint with the same body layout");
+  // Checkpoints written before bodies carried external loads lack their 6 columns (loads zero).
+  const bool with_loads = cols == p.packed_size();
+  if (!with_loads && cols != p.packed_size_without_loads())
+    throw InputError("restart", path, "a checkpoint with the same body layout");
   const Decomposition& decomp = dem.decomposition();
   for (std::size_t off = 0; off < state.size(); off += static_cast<std::size_t>(cols)) {
     const Vec3 x{state[off + 6], state[off + 7], state[off + 8]};
-    if (decomp.owns(x)) p.unpack_append(&state[off]);
+    if (decomp.owns(x)) p.unpack_append(&state[off], with_loads);
   }
   p.owned = p.size();
   const auto keys = f.read_all<std::uint64_t>("pair_keys", cols);

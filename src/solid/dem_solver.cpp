@@ -11,6 +11,7 @@
 #include <unordered_set>
 
 #include "core/errors.hpp"
+#include "core/exact_sum.hpp"
 #include "solid/contact_kernel.hpp"
 #include "solid/triangle_contact.hpp"
 
@@ -43,7 +44,6 @@ DemSettings DemSettings::from_config(const ConfigNode& solid) {
 DemSolver::DemSolver(const Decomposition& decomp, ContactModel model, Walls walls, DemSettings settings)
     : decomp_(decomp), model_(std::move(model)), walls_(std::move(walls)), settings_(settings), halo_(decomp) {
   p_.wall_slots = walls_.slots();
-  wall_force_.assign(walls_.slots(), Vec3{});
   if (plane_mode()) {
     const int n = settings_.plane_normal;
     if (decomp.dims()[n] != 1)
@@ -211,6 +211,19 @@ void DemSolver::setup(bool fresh) {
     list_.history = pair_history;
     p_.wall_history = wall_history;
   }
+}
+
+std::vector<Vec3> DemSolver::wall_forces() const {
+  // Exact sums over every contact (core/exact_sum.hpp): a floor's load is the same bits on any
+  // rank count, however the bodies touching it are spread over the ranks.
+  const std::size_t slots = static_cast<std::size_t>(walls_.slots());
+  std::vector<ExactSum> sums(3 * slots);
+  for (std::size_t k = 0; k < wall_slot_.size() && 3 * k < wall_entry_force_.size(); ++k)
+    for (int d = 0; d < 3; ++d) sums[3 * static_cast<std::size_t>(wall_slot_[k]) + d] += wall_entry_force_[3 * k + d];
+  ExactSum::all_reduce(sums, decomp_.comm());
+  std::vector<Vec3> f(slots);
+  for (std::size_t s = 0; s < slots; ++s) f[s] = {sums[3 * s].value(), sums[3 * s + 1].value(), sums[3 * s + 2].value()};
+  return f;
 }
 
 HistoryMap DemSolver::histories() const {
@@ -740,12 +753,50 @@ void DemSolver::find_moving_candidates() {
 }
 
 void DemSolver::integrate_first() {
-  if (shaped())
-    integrate_first_impl<Bodies::shaped>();
-  else if (plane_mode())
-    integrate_first_impl<Bodies::discs>();
+  // External loads are a compile-time choice: scenes without them run the loop they always ran.
+  if (external_loads_) {
+    if (shaped())
+      integrate_first_impl<Bodies::shaped, true>();
+    else if (plane_mode())
+      integrate_first_impl<Bodies::discs, true>();
+    else
+      integrate_first_impl<Bodies::spheres, true>();
+  } else {
+    if (shaped())
+      integrate_first_impl<Bodies::shaped, false>();
+    else if (plane_mode())
+      integrate_first_impl<Bodies::discs, false>();
+    else
+      integrate_first_impl<Bodies::spheres, false>();
+  }
+}
+
+void DemSolver::integrate_second() {
+  if (external_loads_)
+    integrate_second_impl<true>();
   else
-    integrate_first_impl<Bodies::spheres>();
+    integrate_second_impl<false>();
+}
+
+void DemSolver::use_external_loads(bool on) {
+  apply_pending_kick();  // the pending half-kick belongs to the loads it was computed with
+  external_loads_ = on;
+}
+
+void DemSolver::set_dt(double dt) {
+  if (!(dt > 0) || !std::isfinite(dt))
+    throw RunError("DemSolver::set_dt: the time step must be positive and finite, not " + std::to_string(dt));
+  apply_pending_kick();  // its half-kick is dt/2 of the old step
+  dt_ = dt;
+}
+
+void DemSolver::advance(double dt, int substeps) {
+  if (substeps < 1) throw RunError("DemSolver::advance: at least one sub-step, not " + std::to_string(substeps));
+  if (dt != dt_) set_dt(dt);
+  // Each sub-step but the last defers its second half-kick into the next one's first pass (the
+  // same bits as two passes, one sweep fewer); the last one leaves full-step velocities.
+  for (int k = 0; k < substeps; ++k) step(k + 1 < substeps);
+  complete_step();
 }
 
 void DemSolver::fold_turns() {
@@ -779,7 +830,7 @@ static inline void turn_sphere(double* __restrict qi, const double* wi, double h
   qi[0] = a * scale, qi[1] = b * scale, qi[2] = c * scale, qi[3] = d * scale;
 }
 
-template <DemSolver::Bodies kBodies>
+template <DemSolver::Bodies kBodies, bool kExternal>
 void DemSolver::integrate_first_impl() {
   constexpr bool kSpheres = kBodies != Bodies::shaped;
   const double h = 0.5 * dt_, dt = dt_;
@@ -790,6 +841,8 @@ void DemSolver::integrate_first_impl() {
   double* __restrict q = p_.q.data();
   const double* __restrict f = p_.f.data();
   const double* __restrict t = p_.torque.data();
+  const double* __restrict fe = p_.f_ext.data();
+  const double* __restrict te = p_.t_ext.data();
   const double* __restrict inv_m = inv_mass_.data();
   const double* __restrict inv_i = inv_inertia_.data();
   const std::size_t n = p_.owned;
@@ -818,12 +871,16 @@ void DemSolver::integrate_first_impl() {
     for (int k = 0; k < 3; ++k) vi[k] = v[3 * i + k], wi[k] = w[3 * i + k];
     if (both) {
       fi[0] = kf[i].fx, fi[1] = kf[i].fy, fi[2] = kf[i].fz, ti[0] = kf[i].tx, ti[1] = kf[i].ty, ti[2] = kf[i].tz;
+      if constexpr (kExternal)
+        for (int k = 0; k < 3; ++k) fi[k] += fe[3 * i + k], ti[k] += te[3 * i + k];
       for (int k = 0; k < 3; ++k) {
         vi[k] = (vi[k] + h * (fi[k] * a + g[k])) * vmask[k];
         wi[k] = (wi[k] + h * ti[k] * b) * wmask[k];
       }
     } else {
       for (int k = 0; k < 3; ++k) fi[k] = f[3 * i + k], ti[k] = t[3 * i + k];
+      if constexpr (kExternal)
+        for (int k = 0; k < 3; ++k) fi[k] += fe[3 * i + k], ti[k] += te[3 * i + k];
     }
     for (int k = 0; k < 3; ++k) {
       vi[k] = (vi[k] + h * (fi[k] * a + g[k])) * vmask[k];
@@ -850,16 +907,24 @@ void DemSolver::integrate_first_impl() {
     moved2_[0] = moved2, moved2_[1] = moved_since_walls2;
   } else {
     for (std::size_t i = 0; i < n; ++i) {
-      if (anisotropic(p_.shape[i]))
-        rotate_shaped(i, t + 3 * i, h, dt);
-      else
+      if (anisotropic(p_.shape[i])) {
+        if constexpr (kExternal) {
+          const double total[3] = {t[3 * i] + te[3 * i], t[3 * i + 1] + te[3 * i + 1], t[3 * i + 2] + te[3 * i + 2]};
+          rotate_shaped(i, total, h, dt);
+        } else {
+          rotate_shaped(i, t + 3 * i, h, dt);
+        }
+      } else {
         turn_sphere(q + 4 * i, w + 3 * i, h);
+      }
     }
   }
 }
 
-void DemSolver::integrate_second() {
-  // Takes the new forces from the contact buffer (one pass: store F, T and kick).
+template <bool kExternal>
+void DemSolver::integrate_second_impl() {
+  // Takes the new forces from the contact buffer (one pass: store F, T and kick). The stored F, T
+  // are the contacts' alone: the next first half-kick adds the external load again.
   const double h = 0.5 * dt_;
   const double g[3] = {settings_.gravity.x, settings_.gravity.y, settings_.gravity.z};
   double* __restrict v = p_.v.data();
@@ -867,6 +932,8 @@ void DemSolver::integrate_second() {
   double* __restrict f = p_.f.data();
   double* __restrict t = p_.torque.data();
   const KernelForce* __restrict in = k_force_.data();
+  const double* __restrict fe = p_.f_ext.data();
+  const double* __restrict te = p_.t_ext.data();
   const double* __restrict inv_m = inv_mass_.data();
   const double* __restrict inv_i = inv_inertia_.data();
   const std::size_t n = p_.owned;
@@ -874,16 +941,24 @@ void DemSolver::integrate_second() {
   const double* wmask = spin_mask_.data();
   for (std::size_t i = 0; i < n; ++i) {
     const double fi[3] = {in[i].fx, in[i].fy, in[i].fz}, ti[3] = {in[i].tx, in[i].ty, in[i].tz};
+    double fa[3] = {fi[0], fi[1], fi[2]}, ta[3] = {ti[0], ti[1], ti[2]};  // what accelerates the body
+    if constexpr (kExternal)
+      for (int k = 0; k < 3; ++k) fa[k] += fe[3 * i + k], ta[k] += te[3 * i + k];
     double vi[3], wi[3];  // loads before stores (see integrate_first)
     for (int k = 0; k < 3; ++k) {
-      vi[k] = (v[3 * i + k] + h * (fi[k] * inv_m[i] + g[k])) * vmask[k];
-      wi[k] = (w[3 * i + k] + h * ti[k] * inv_i[i]) * wmask[k];
+      vi[k] = (v[3 * i + k] + h * (fa[k] * inv_m[i] + g[k])) * vmask[k];
+      wi[k] = (w[3 * i + k] + h * ta[k] * inv_i[i]) * wmask[k];
     }
     for (int k = 0; k < 3; ++k) f[3 * i + k] = fi[k], t[3 * i + k] = ti[k], v[3 * i + k] = vi[k], w[3 * i + k] = wi[k];
   }
   if (shaped())
-    for (std::size_t i = 0; i < n; ++i)
-      if (anisotropic(p_.shape[i])) rotate_shaped(i, t + 3 * i, h, 0.0);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!anisotropic(p_.shape[i])) continue;
+      double total[3] = {t[3 * i], t[3 * i + 1], t[3 * i + 2]};
+      if constexpr (kExternal)
+        for (int k = 0; k < 3; ++k) total[k] += te[3 * i + k];
+      rotate_shaped(i, total, h, 0.0);
+    }
 }
 
 void DemSolver::rotate_shaped(std::size_t i, const double* torque, double h, double dt) {
@@ -1120,7 +1195,7 @@ void DemSolver::compute_wall_forces(double dt) {
   // Walls: bodies near a wall at the last rebuild, in (body, wall) order; same lanes and law.
   const auto& prims = walls_.primitives();
   const std::size_t slots = static_cast<std::size_t>(walls_.slots());
-  for (auto& wf : wall_force_) wf = Vec3{};
+  wall_entry_force_.assign(3 * wall_body_.size(), 0.0);
   ContactLanes& L = lanes_;
   std::int32_t lane_entry[ContactLanes::width];
   const ContactCoefficients* sets = coefficient_sets_.data();
@@ -1133,7 +1208,8 @@ void DemSolver::compute_wall_forces(double dt) {
       double* h = sh ? &wall_hist_[3 * k] : &p_.wall_history[3 * (i * slots + wall_slot_[k])];
       h[0] = L.hx[j], h[1] = L.hy[j], h[2] = L.hz[j];
       add_wall_reaction(i, L, j);
-      wall_force_[wall_slot_[k]] -= Vec3{L.fx[j], L.fy[j], L.fz[j]};
+      double* load = &wall_entry_force_[3 * k];
+      load[0] = -L.fx[j], load[1] = -L.fy[j], load[2] = -L.fz[j];
     }
     nb = 0;
   };
@@ -1164,12 +1240,15 @@ void DemSolver::compute_wall_forces(double dt) {
   if (nb) flush();
 }
 
+void DemSolver::apply_pending_kick() {
+  if (!kick_pending_) return;
+  auto t = timers_.scope("integrate");
+  integrate_second();
+  kick_pending_ = false;
+}
+
 void DemSolver::complete_step() {
-  if (kick_pending_) {
-    auto t = timers_.scope("integrate");
-    integrate_second();
-    kick_pending_ = false;
-  }
+  apply_pending_kick();
   fold_turns();
 }
 
@@ -1219,8 +1298,11 @@ void DemSolver::step(bool defer_kick) {
 
 DemStats DemSolver::stats() const {
   if (kick_pending_) throw std::logic_error("DemSolver::stats: a deferred half-kick is pending (complete_step)");
+  // Energies as exact sums (core/exact_sum.hpp): the same bits on any rank count.
+  ExactSum energy[2];
   double e[3] = {0, 0, 0};
-  long c[5] = {static_cast<long>(p_.owned), 0, 0, 0, 0};  // bodies, contacts, wall contacts, non-finite, body pairs
+  // bodies, contacts, wall contacts, non-finite, body pairs, contacts with a ghost
+  long c[6] = {static_cast<long>(p_.owned), 0, 0, 0, 0, 0};
   struct {
     double ratio;
     int body;
@@ -1231,13 +1313,15 @@ DemStats DemSolver::stats() const {
   for (std::size_t i = 0; i < p_.owned; ++i) {
     const Vec3 x = p_.pos(i), v = p_.vel(i), w = p_.ang(i);
     if (!std::isfinite(norm2(x) + norm2(v) + norm2(w))) ++c[3];
-    e[0] += 0.5 * p_.mass[i] * norm2(v);
+    energy[0] += 0.5 * p_.mass[i] * norm2(v);
     if (anisotropic(p_.shape[i])) {
       const Quaternion q{p_.q[4 * i], p_.q[4 * i + 1], p_.q[4 * i + 2], p_.q[4 * i + 3]};
       const Vec3 wb = q.unrotate(w);
-      for (int k = 0; k < 3; ++k) e[1] += 0.5 * inertia3_[3 * i + k] * wb[k] * wb[k];
+      double rotational = 0;
+      for (int k = 0; k < 3; ++k) rotational += 0.5 * inertia3_[3 * i + k] * wb[k] * wb[k];
+      energy[1] += rotational;
     } else {
-      e[1] += 0.5 * p_.inertia[i] * norm2(w);
+      energy[1] += 0.5 * p_.inertia[i] * norm2(w);
     }
     e[2] = std::max(e[2], norm(v));
   }
@@ -1254,6 +1338,7 @@ DemStats DemSolver::stats() const {
     const double r = norm(ex(a) - ex(b)), rs = er(a) + er(b);
     if (r < rs) {
       ++c[1];
+      if (b >= owned_elements) ++c[5];
       note_overlap(rs - r, std::min(er(a), er(b)), eid(a));
       // Body pairs: a body's element keys all precede a higher-order body's, so the lower element's
       // body is the pair's lower body and its owner counts the pair.
@@ -1271,16 +1356,19 @@ DemStats DemSolver::stats() const {
       }
     }
   MPI_Comm comm = decomp_.comm();
-  MPI_Allreduce(MPI_IN_PLACE, e, 2, MPI_DOUBLE, MPI_SUM, comm);
+  // Free spheres are held on every rank: added once, after the sums.
+  ExactSum::all_reduce(energy, comm);
+  for (const FreeSphere& fs : free_) {
+    energy[0] += 0.5 * fs.mass * norm2(fs.v);
+    energy[1] += 0.5 * fs.inertia * norm2(fs.omega);
+  }
+  e[0] = energy[0].value(), e[1] = energy[1].value();
   MPI_Allreduce(MPI_IN_PLACE, &e[2], 1, MPI_DOUBLE, MPI_MAX, comm);
-  MPI_Allreduce(MPI_IN_PLACE, c, 5, MPI_LONG, MPI_SUM, comm);
+  MPI_Allreduce(MPI_IN_PLACE, c, 6, MPI_LONG, MPI_SUM, comm);
   if (!std::isfinite(worst.ratio)) worst.ratio = 1e300;
   MPI_Allreduce(MPI_IN_PLACE, &worst, 1, MPI_DOUBLE_INT, MPI_MAXLOC, comm);
-  // Free spheres are held on every rank: counted once, after the sums.
   for (const FreeSphere& fs : free_) {
     if (!std::isfinite(norm2(fs.x) + norm2(fs.v) + norm2(fs.omega))) ++c[3];
-    e[0] += 0.5 * fs.mass * norm2(fs.v);
-    e[1] += 0.5 * fs.inertia * norm2(fs.omega);
     e[2] = std::max(e[2], norm(fs.v));
   }
   DemStats s;
@@ -1288,6 +1376,7 @@ DemStats DemSolver::stats() const {
   s.contacts = c[1];
   s.body_contacts = c[4];
   s.wall_contacts = c[2];
+  s.cross_rank_contacts = c[5];
   s.finite = c[3] == 0;
   s.kinetic_translational = e[0];
   s.kinetic_rotational = e[1];

@@ -65,6 +65,7 @@ struct DemStats {
   long contacts = 0;             // touching element pairs (bodies; contact spheres of shaped bodies)
   long body_contacts = 0;        // touching body pairs (one per pair however many spheres touch)
   long wall_contacts = 0;        // touching element-wall pairs
+  long cross_rank_contacts = 0;  // touching element pairs whose bodies have different owners
   double max_overlap_ratio = 0;  // largest overlap over the smaller radius (walls: the body's)
   std::int64_t max_overlap_body = -1;
   bool finite = true;  // every position and velocity finite
@@ -123,6 +124,19 @@ class DemSolver {
   // Applies a deferred half-kick and folds the plane-mode turns into q (both idempotent).
   void complete_step();
 
+  // Time step, chosen at set-up (T6) or set by a caller (the coupled flow's sub-cycling). Applies
+  // a pending half-kick first (it belongs to the old step).
+  void set_dt(double dt);
+  // Collective: `substeps` steps of dt; ends with full-step velocities and orientations (what a
+  // coupled flow reads after its DEM sub-cycles).
+  void advance(double dt, int substeps);
+  // External loads (ParticleStore::f_ext, t_ext; every rank alike): on, the integrator adds each
+  // owned body's f_ext and t_ext to its contact force and torque in both half-kicks. Off (the
+  // default), they are not read at all. Change the arrays only when no kick is pending (after
+  // advance or complete_step).
+  void use_external_loads(bool on);
+  bool external_loads() const { return external_loads_; }
+
   double dt() const { return dt_; }
   double time() const { return time_; }
   long steps() const { return steps_; }
@@ -135,8 +149,9 @@ class DemSolver {
   double contact_duration() const { return t_contact_; }
 
   DemStats stats() const;  // collective
-  // Total force of the owned bodies on each wall primitive at the last force evaluation (local).
-  const std::vector<Vec3>& wall_forces() const { return wall_force_; }
+  // Collective: total force of all bodies on each wall primitive at the last force evaluation,
+  // summed exactly (the same bits on any rank count).
+  std::vector<Vec3> wall_forces() const;
   // Contact histories of touching pairs (this rank's list; pairs with an owned body).
   HistoryMap histories() const;
   std::size_t list_builds() const { return list_.builds; }
@@ -145,6 +160,7 @@ class DemSolver {
   // pivot meshes have it every step already.
   void sum_mesh_loads();
   std::size_t halo_bytes_sent() const { return halo_.bytes_sent(); }  // this rank, whole run
+  std::size_t migrations() const { return halo_.migrations(); }       // bodies this rank sent away
 
  private:
   void rebuild();
@@ -160,9 +176,13 @@ class DemSolver {
   void fill_pair_coefficients();
   void integrate_first();
   enum class Bodies { shaped, spheres, discs };
-  template <Bodies kBodies>
+  template <Bodies kBodies, bool kExternal>
   void integrate_first_impl();
   void integrate_second();
+  template <bool kExternal>
+  void integrate_second_impl();
+  void apply_pending_kick();
+  bool external_loads_ = false;
   void sort_owned_by_order();
   void assign_order();
   // Shaped mode: element arrays of every local body (after ghosts), and their positions/mirrors.
@@ -242,7 +262,7 @@ class DemSolver {
   ContactLanes lanes_;
   // Listed pairs touching now and at the previous force evaluation (ascending list indices).
   std::vector<std::int32_t> touching_, touching_before_;
-  std::vector<Vec3> wall_force_;
+  std::vector<double> wall_entry_force_;  // 3 per wall entry: the body's force on the wall
   // Shaped mode.
   std::vector<ShapeTemplate> shapes_;
   std::vector<char> anisotropic_;  // per shape id: principal moments differ (DLM rotation)

@@ -47,6 +47,7 @@ void Halo::migrate(ParticleStore& p, HistoryMap& histories) {
           continue;
         }
         p.pack(i, out_);
+        ++migrations_;
         if (!indexed) {
           by_body.reserve(2 * histories.size());
           for (const auto& [key, h] : histories) index_key(key);

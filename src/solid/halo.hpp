@@ -40,6 +40,7 @@ class Halo {
   void forward(ParticleStore& p);
 
   std::size_t bytes_sent() const { return bytes_sent_; }
+  std::size_t migrations() const { return migrations_; }  // bodies sent to another rank, whole run
 
   // Shaped bodies: ghosts also need their orientation every step, and history keys are element
   // keys (body order * key_stride + sphere index; wall entries have a high part >= kWallKeyBase).
@@ -57,7 +58,7 @@ class Halo {
   const Decomposition& decomp_;
   std::vector<Swap> swaps_;
   std::vector<double> out_, in_;
-  std::size_t bytes_sent_ = 0;
+  std::size_t bytes_sent_ = 0, migrations_ = 0;
 };
 
 }  // namespace tessera

@@ -20,6 +20,8 @@ void ParticleStore::resize(std::size_t n) {
   f.resize(3 * n);
   torque.resize(3 * n);
   wall_history.resize(3 * static_cast<std::size_t>(wall_slots) * n);
+  f_ext.resize(3 * n);
+  t_ext.resize(3 * n);
 }
 
 std::size_t ParticleStore::push_back(std::int64_t gid, int mat, double r, double m, double inertia_moment,
@@ -38,7 +40,7 @@ std::size_t ParticleStore::push_back(std::int64_t gid, int mat, double r, double
   w.store(&omega[3 * i]);
   q[4 * i] = 1.0;
   q[4 * i + 1] = q[4 * i + 2] = q[4 * i + 3] = 0.0;
-  for (int k = 0; k < 3; ++k) f[3 * i + k] = torque[3 * i + k] = 0.0;
+  for (int k = 0; k < 3; ++k) f[3 * i + k] = torque[3 * i + k] = f_ext[3 * i + k] = t_ext[3 * i + k] = 0.0;
   for (int k = 0; k < 3 * wall_slots; ++k) wall_history[3 * wall_slots * i + k] = 0.0;
   return i;
 }
@@ -58,6 +60,8 @@ void ParticleStore::copy(std::size_t s, std::size_t d) {
     omega[3 * d + k] = omega[3 * s + k];
     f[3 * d + k] = f[3 * s + k];
     torque[3 * d + k] = torque[3 * s + k];
+    f_ext[3 * d + k] = f_ext[3 * s + k];
+    t_ext[3 * d + k] = t_ext[3 * s + k];
   }
   for (int k = 0; k < 4; ++k) q[4 * d + k] = q[4 * s + k];
   const std::size_t w = 3 * static_cast<std::size_t>(wall_slots);
@@ -79,6 +83,8 @@ void ParticleStore::swap(std::size_t a, std::size_t b) {
     std::swap(omega[3 * a + k], omega[3 * b + k]);
     std::swap(f[3 * a + k], f[3 * b + k]);
     std::swap(torque[3 * a + k], torque[3 * b + k]);
+    std::swap(f_ext[3 * a + k], f_ext[3 * b + k]);
+    std::swap(t_ext[3 * a + k], t_ext[3 * b + k]);
   }
   for (int k = 0; k < 4; ++k) std::swap(q[4 * a + k], q[4 * b + k]);
   const std::size_t w = 3 * static_cast<std::size_t>(wall_slots);
@@ -101,9 +107,11 @@ void ParticleStore::pack(std::size_t i, std::vector<double>& buf) const {
   buf.push_back(static_cast<double>(order[i]));
   const std::size_t w = 3 * static_cast<std::size_t>(wall_slots);
   for (std::size_t k = 0; k < w; ++k) buf.push_back(wall_history[w * i + k]);
+  for (int k = 0; k < 3; ++k) buf.push_back(f_ext[3 * i + k]);
+  for (int k = 0; k < 3; ++k) buf.push_back(t_ext[3 * i + k]);
 }
 
-std::size_t ParticleStore::unpack_append(const double* b) {
+std::size_t ParticleStore::unpack_append(const double* b, bool with_loads) {
   const std::size_t i = id.size();
   resize(i + 1);
   id[i] = static_cast<std::int64_t>(b[0]);
@@ -121,6 +129,10 @@ std::size_t ParticleStore::unpack_append(const double* b) {
   order[i] = static_cast<std::int64_t>(b[25]);
   const std::size_t w = 3 * static_cast<std::size_t>(wall_slots);
   for (std::size_t k = 0; k < w; ++k) wall_history[w * i + k] = b[26 + k];
+  for (int k = 0; k < 3; ++k) {
+    f_ext[3 * i + k] = with_loads ? b[26 + w + k] : 0.0;
+    t_ext[3 * i + k] = with_loads ? b[29 + w + k] : 0.0;
+  }
   return i;
 }
 

@@ -31,6 +31,10 @@ struct ParticleStore {
   std::vector<double> q;             // orientation quaternion (w, x, y, z), 4 per body
   std::vector<double> f, torque;     // 3 per body, owned bodies only are meaningful
   std::vector<double> wall_history;  // 3 per body per wall slot: tangential spring (eq. 5)
+  // External load (the fluid's force on the body, a borehole's pressure): 3 per body, added to the
+  // contact force and torque in both half-kicks while DemSolver::external_loads() is on. Set by
+  // the body's owner; travels with the body (migration, ordering, checkpoints).
+  std::vector<double> f_ext, t_ext;
 
   int wall_slots = 0;
   std::size_t owned = 0, ghosts = 0;
@@ -49,10 +53,13 @@ struct ParticleStore {
   Vec3 ang(std::size_t i) const { return Vec3::load(&omega[3 * i]); }
 
   // Full state of one body, for migration and checkpoints: number of doubles per body.
-  int packed_size() const { return 26 + 3 * wall_slots; }
+  // Layout: the 26 fields of packed_size_without_loads, the wall histories, then f_ext and t_ext.
+  int packed_size() const { return 32 + 3 * wall_slots; }
+  int packed_size_without_loads() const { return 26 + 3 * wall_slots; }  // checkpoints before 2026-11-29
   void pack(std::size_t i, std::vector<double>& buf) const;
-  // Appends a body unpacked from buf at offset; returns the new offset.
-  std::size_t unpack_append(const double* buf);
+  // Appends a body unpacked from buf; returns its index. with_loads = false reads the layout
+  // without external loads (older checkpoints) and sets them to zero.
+  std::size_t unpack_append(const double* buf, bool with_loads = true);
 
   // What a ghost needs for contact forces: id, order, material, shape, radius, mass, x, v, omega, q.
   static constexpr int ghost_size = 19;
