@@ -16,12 +16,12 @@
 
 #include "app/scenes.hpp"
 #include "core/errors.hpp"
+#include "core/text_file.hpp"
 
 #if defined(TESSERA_HAVE_PETSC)
 #include "app/signals.hpp"
 #include "fluid/flow_solver.hpp"
 #include "fluid/fluid_io.hpp"
-#include "solid/dem_io.hpp"
 #include "tessera_version.hpp"
 #endif
 

@@ -7,7 +7,7 @@
 
 #include "core/errors.hpp"
 #include "core/h5_file.hpp"
-#include "solid/dem_io.hpp"
+#include "core/text_file.hpp"
 
 namespace tessera {
 namespace fs = std::filesystem;

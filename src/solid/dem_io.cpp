@@ -13,6 +13,7 @@
 
 #include "core/errors.hpp"
 #include "core/h5_file.hpp"
+#include "core/text_file.hpp"
 
 namespace tessera {
 
@@ -20,17 +21,6 @@ namespace fs = std::filesystem;
 
 constexpr int kMeshStateSize = 16;        // origin, q, velocity, omega, theta, theta', theta''
 constexpr int kFreeSphereStateSize = 15;  // x, v, omega, force, torque
-
-void write_file_atomically(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::trunc);
-    out << text;
-    out.flush();
-    if (!out) throw RunError("cannot write " + tmp);
-  }
-  fs::rename(tmp, path);
-}
 
 namespace {
 

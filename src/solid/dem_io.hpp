@@ -51,7 +51,4 @@ void write_lammps_data(const std::string& path, const DemSolver& dem);
 long read_lammps_data(const std::string& path, DemSolver& dem, const std::vector<int>& type_materials,
                       const std::string& key_for_errors);
 
-// Writes text to path atomically (temporary file + rename); rank 0 only.
-void write_file_atomically(const std::string& path, const std::string& text);
-
 }  // namespace tessera

@@ -222,7 +222,8 @@ std::vector<Vec3> DemSolver::wall_forces() const {
     for (int d = 0; d < 3; ++d) sums[3 * static_cast<std::size_t>(wall_slot_[k]) + d] += wall_entry_force_[3 * k + d];
   ExactSum::all_reduce(sums, decomp_.comm());
   std::vector<Vec3> f(slots);
-  for (std::size_t s = 0; s < slots; ++s) f[s] = {sums[3 * s].value(), sums[3 * s + 1].value(), sums[3 * s + 2].value()};
+  for (std::size_t s = 0; s < slots; ++s)
+    f[s] = {sums[3 * s].value(), sums[3 * s + 1].value(), sums[3 * s + 2].value()};
   return f;
 }
 

@@ -38,7 +38,7 @@ inline const char* kViolentShapedDeposition = R"(
 scene: deposition
 domain: {box_min: [0, 0, 0], box_max: [6 mm, 6 mm, 12 mm]}
 solid:
-  gravity: [0.5, -0.3, -981]
+  gravity: [200, -150, -981]   # sideways too: grains cross the x and y cuts
   steps_per_contact: 20
   neighbor_skin: 0.05 mm
   materials: {sand: {density: 2650}, wall: {density: 2650}}
