@@ -56,6 +56,7 @@ FlowSolver::FlowSolver(const Decomposition& decomp, const FlowSettings& settings
     u_[d] = g.make_field();
     uf_[d] = g.make_field();
     work_[d] = g.make_field();
+    face_accel_[d] = g.make_field();
     flux_q_[d] = g.make_field();
   }
   for (auto& a : plic_) a = g.make_field();
@@ -506,7 +507,7 @@ PoissonStats FlowSolver::project(double dt, bool with_gravity) {
     const int n = g.cells()[d];
     const double h = g.h(d);
     auto& uf = uf_[d];
-    auto& a = work_[d];
+    auto& a = face_accel_[d];
     for_box({g.begin(0), g.begin(1), g.begin(2)}, hi, [&](int i, int j, int k) {
       const std::size_t c = g.at(i, j, k);
       const int idx = d == 0 ? i : (d == 1 ? j : k);
@@ -530,7 +531,7 @@ PoissonStats FlowSolver::project(double dt, bool with_gravity) {
     const std::ptrdiff_t st = g.stride(d);
     for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)}, [&](int i, int j, int k) {
       const std::size_t c = g.at(i, j, k);
-      u_[d][c] += dt * 0.5 * (work_[d][c] + work_[d][c + st]);
+      u_[d][c] += dt * 0.5 * (face_accel_[d][c] + face_accel_[d][c + st]);
     });
   }
   g.exchange({&u_[0], &u_[1], &u_[2]});

@@ -117,6 +117,9 @@ class FlowSolver {
   const std::vector<double>& pressure() const { return p_; }
   const std::vector<double>& face_velocity(int d) const { return uf_[d]; }
   const std::vector<double>& density() const { return rho_; }
+  // The last projection's face accelerations a_f = g_f - grad_f p / rho_f along d (F10), on the
+  // low face of each cell (the coupling's pressure force on bodies reads them).
+  const std::vector<double>& face_acceleration(int d) const { return face_accel_[d]; }
   std::vector<double>& mutable_fraction() { return f_; }
   std::vector<double>& mutable_velocity(int d) { return u_[d]; }
   std::vector<double>& mutable_pressure() { return p_; }
@@ -150,9 +153,10 @@ class FlowSolver {
   std::unique_ptr<FluidGrid> grid_;
   std::unique_ptr<PressurePoisson> poisson_;
   std::vector<double> f_, p_, rho_, mu_, indicator_, dilatation_;
-  std::array<std::vector<double>, 3> u_, uf_, work_;
+  std::array<std::vector<double>, 3> u_, uf_, face_accel_;
+  std::array<std::vector<double>, 3> work_;  // the viscous stage's new velocities (swapped into u_)
   std::array<std::vector<double>, 4> plic_;  // nx, ny, nz, alpha of interface cells
-  std::vector<double> flux_f_, flux_m_, rhs_, accel_;
+  std::vector<double> flux_f_, flux_m_, rhs_;
   std::array<std::vector<double>, 3> flux_q_;
   PhaseTimers timers_;
   double time_ = 0;
