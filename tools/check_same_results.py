@@ -5,12 +5,15 @@ For refactorings that must change no result (issue 14): every quantity in summar
 flow cases, every column of series.csv must be identical. Keys named with --allow may differ in the
 last digits only (relative 1e-12): sums whose reduction became canonical.
 
-  tools/check_same_results.py BEFORE_BIN AFTER_BIN [--cases deposition,grain_bed,bunker,flow]
-                              [--allow kinetic_energy,...] [--ranks 2] [--work /tmp/same]
+  git worktree add /tmp/before OLD_COMMIT   # its case files, for the BEFORE binary
+  tools/check_same_results.py BEFORE_BIN AFTER_BIN --before-root /tmp/before
+                              [--cases deposition,grain_bed,bunker,flow] [--allow kinetic_energy,...]
+                              [--ranks 2] [--work /tmp/same]
 
 Cases (2 ranks, about 12 minutes per binary on 2 cores in all):
   deposition  cases/deposition/small.yaml, to settled
   grain_bed   cases/grain_bed/small.yaml, first 0.03 s
+  hertz       cases/deposition/paper.yaml in a 20 mm box, first 2 ms (Hertz-Mindlin)
   bunker      the small pipeline: bed_small (to settled), ball_small, relax_small, small (the shot)
   flow        dam_break/martin_moyce (0.05 s), drop_impact/seed_floor, seed_pool and pool_bench (1 ms)
 Exit code 0 when everything matches, 1 otherwise.
@@ -29,6 +32,10 @@ ROOT = Path(__file__).resolve().parent.parent
 CASES = {
     "deposition": [("deposition", "cases/deposition/small.yaml", [])],
     "grain_bed": [("grain_bed", "cases/grain_bed/small.yaml", ["run.end_time=0.03"])],
+    # The Hertz-Mindlin law (no small case uses it): the paper deposition cut to a 20 mm box, 2 ms.
+    "hertz": [("hertz", "cases/deposition/paper.yaml",
+               ["domain.box_max=[20 mm, 3 mm, 20 mm]", "solid.walls.0.max=[20 mm, 3 mm, 20 mm]",
+                "deposition.region_max=[20 mm, 3 mm, 19 mm]", "run.end_time=2e-3", "output.checkpoint_interval=0"])],
     "bunker": [
         ("bunker_bed", "cases/bunker_shot/bed_small.yaml", []),
         ("bunker_ball", "cases/bunker_shot/ball_small.yaml", ["bed.file={work}/bunker_bed/checkpoint.h5"]),
@@ -46,13 +53,16 @@ CASES = {
 IGNORED = {"wall_time", "loop_time", "timers", "case", "version", "output_dir"}
 
 
-def run(binary, ranks, case, sets, out):
+def run(binary, root, ranks, case, sets, out):
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                OMPI_MCA_rmaps_base_oversubscribe="1", CI="1")
-    cmd = ["mpirun", "-n", str(ranks), binary, "run", str(ROOT / case), "--quiet", "--output", str(out),
-           "--set", "output.snapshot_interval=0"]
-    if "cases/dam_break" in case or "cases/drop_impact" in case:
-        cmd[-1] = "output.field_interval=0"
+    path = Path(root) / case
+    # The flow scene before 2026-11-29 named its snapshot interval field_interval.
+    text = path.read_text()
+    old_flow = "field_interval" in text or ("fluid:" in text and Path(root).resolve() != ROOT)
+    key = "field_interval" if old_flow else "snapshot_interval"
+    cmd = ["mpirun", "-n", str(ranks), binary, "run", str(path), "--quiet", "--output", str(out),
+           "--set", f"output.{key}=0"]
     for s in sets:
         cmd += ["--set", s.format(work=out.parent)]
     r = subprocess.run(cmd, env=env, capture_output=True, text=True)
@@ -106,15 +116,17 @@ def main():
     ap.add_argument("--allow", default="")
     ap.add_argument("--ranks", type=int, default=2)
     ap.add_argument("--work", default="/tmp/tessera_same")
+    ap.add_argument("--before-root", default=str(ROOT),
+                    help="the checkout whose case files the BEFORE binary reads (git worktree of the old commit)")
     a = ap.parse_args()
     allow = set(filter(None, a.allow.split(",")))
     failed = False
     for name in a.cases.split(","):
         for sub, case, sets in CASES[name]:
             results = {}
-            for label, binary in (("before", a.before), ("after", a.after)):
+            for label, binary, root in (("before", a.before, a.before_root), ("after", a.after, ROOT)):
                 out = Path(a.work) / label / sub
-                run(os.path.abspath(binary), a.ranks, case, sets, out)
+                run(os.path.abspath(binary), root, a.ranks, case, sets, out)
                 results[label] = out
             diffs = []
             sa = json.load(open(results["before"] / "summary.json"))

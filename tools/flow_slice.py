@@ -3,7 +3,7 @@
 
 Usage: flow_slice.py RUN_DIR [--axis x|y|z] [--at POSITION_M] [--snapshot N|all] [--out FILE.png]
        [--arrows 24] [--scale S]
-RUN_DIR/fields/fields_NNNNN.h5 (written by output.field_interval). The slice is the cell plane
+RUN_DIR/fields/fields_NNNNN.h5 (written by output.snapshot_interval). The slice is the cell plane
 nearest POSITION_M along AXIS (default: the middle). With --snapshot all, one PNG per snapshot
 (FILE_NNNNN.png) and a strip of up to six of them side by side (FILE), as the drop-impact seed's
 figures 8-12 show the splash in time."""
@@ -76,7 +76,7 @@ def main():
     args = ap.parse_args()
     files = sorted(glob.glob(os.path.join(args.run_dir, 'fields', 'fields_*.h5')))
     if not files:
-        sys.exit('no fields in %s/fields: set output.field_interval' % args.run_dir)
+        sys.exit('no fields in %s/fields: set output.snapshot_interval' % args.run_dir)
     if args.snapshot == 'all':
         base, ext = os.path.splitext(args.out)
         for path in files:

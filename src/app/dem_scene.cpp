@@ -41,17 +41,11 @@ DemScene::DemScene(const ConfigNode& root, MPI_Comm comm, const std::string& cas
                           b.real("density", Dim::density, Range::positive(), 0.0));
   }
 
+  read_loop_keys(root, false);
   const ConfigNode run = root.section("run");
-  if (run.has("end_time")) end_time_ = run.real("end_time", Dim::time, Range::positive());
-  if (run.has("max_steps")) max_steps_ = run.integer("max_steps", 1, 1L << 50);
   check_interval_ = run.real("check_interval", Dim::time, Range::positive(), 1e-3);
   max_overlap_ratio_ = run.real("max_overlap_ratio", Dim::none, Range{0.0, 2.0, true, false}, max_overlap_ratio_);
-
-  if (const auto out = root.optional_section("output")) {
-    snapshot_interval_ = out->real("snapshot_interval", Dim::time, Range::non_negative(), 0.0);
-    checkpoint_interval_ = out->real("checkpoint_interval", Dim::time, Range::non_negative(), 0.0);
-    progress_interval_ = out->real("progress_interval", Dim::time, Range::positive(), 10.0);
-  }
+  poll_every_ = 100;
 }
 
 std::string DemScene::resolve_path(const std::string& p) const {
@@ -72,7 +66,7 @@ void DemScene::require_pairs(const std::vector<int>& mats) const {
 
 void DemScene::check_health(const DemStats& s, const RunOptions& opt) {
   if (s.finite && s.max_overlap_ratio <= max_overlap_ratio_) return;
-  write_checkpoint(opt.output_dir + "/failure.h5", *dem_, extras());
+  tessera::write_checkpoint(opt.output_dir + "/failure.h5", *dem_, extras());
   std::ostringstream m;
   m << "blow-up at step " << dem_->steps() << ", t = " << dem_->time() << " s: ";
   if (!s.finite)
@@ -87,12 +81,7 @@ void DemScene::check_health(const DemStats& s, const RunOptions& opt) {
   throw CollectiveRunError(m.str());
 }
 
-nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolved_case) {
-  MPI_Comm comm = decomp_->comm();
-  const bool root = decomp_->rank() == 0;
-  const auto wall_start = std::chrono::steady_clock::now();
-  auto wall = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count(); };
-
+void DemScene::start(const RunOptions& opt) {
   if (opt.restart) {
     restore(read_checkpoint(*opt.restart, *dem_));
     dem_->setup(false);
@@ -100,20 +89,11 @@ nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolv
     create_bodies();
     dem_->setup(!continues_state());
   }
-  // Set-up succeeded: only now does the run leave anything on disk.
-  if (root) {
-    fs::create_directories(opt.output_dir);
-    if (!opt.resolved_case_yaml.empty())
-      write_file_atomically(opt.output_dir + "/case.resolved.yaml", opt.resolved_case_yaml);
-  }
-  MPI_Barrier(comm);
-  const long start_steps = dem_->steps();
-  double loop_seconds = 0;  // the time-step loop only, as LAMMPS' "Loop time"
-  MPI_Barrier(comm);
-  const double loop_start = wall();
-  DemStats stats = dem_->stats();
-  long cross_rank_contacts = 0;  // summed over the checks: evidence that the ranks shared contacts
-  if (root && !opt.quiet) {
+}
+
+void DemScene::begin_output(const RunOptions& opt) {
+  const DemStats stats = dem_->stats();
+  if (decomp_->rank() == 0 && !opt.quiet) {
     const auto& g = decomp_->dims();
     std::printf("tessera %s: scene %s, %ld bodies, %d ranks (grid %dx%dx%d), law %s\n", kTesseraVersion, name(),
                 stats.bodies, decomp_->size(), g[0], g[1], g[2], dem_->model().law_name());
@@ -124,76 +104,51 @@ nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolv
                   dem_->dt() / dem_->contact_duration());
     std::fflush(stdout);
   }
+  snapshots_ = std::make_unique<SnapshotSeries>(opt.output_dir + "/snapshots");
+  if (snapshot_interval_ > 0) snapshots_->write(*dem_);
+  checks_ = Schedule(check_interval_, dem_->time());
+}
 
-  SnapshotSeries snapshots(opt.output_dir + "/snapshots");
-  auto next_after = [&](double interval) {
-    return interval > 0 ? (std::floor(dem_->time() / interval + 1e-9) + 1) * interval : 1e300;
-  };
-  if (snapshot_interval_ > 0) snapshots.write(*dem_);
-  double next_snapshot = next_after(snapshot_interval_), next_checkpoint = next_after(checkpoint_interval_);
-  double next_check = next_after(check_interval_);
-  double last_progress = 0;
-  std::string status = "completed";
-  constexpr long poll_every = 100;  // steps between collective polls (signals, progress)
+void DemScene::step(const RunOptions& opt) {
+  // The second half-kick of the bodies waits for the next step's first pass (one sweep over the
+  // bodies instead of two); anything that reads body state completes the step first.
+  dem_->step(true);
+  on_step(opt);
+}
 
-  while (true) {
-    if (end_time_ && dem_->time() >= *end_time_ - 0.5 * dem_->dt()) break;
-    if (max_steps_ && dem_->steps() >= *max_steps_) break;
-    // The second half-kick of the bodies waits for the next step's first pass (one sweep over the
-    // bodies instead of two); anything below that reads body state completes the step first.
-    dem_->step(true);
-    after_step(opt);
-    if (dem_->time() >= next_check - 0.5 * dem_->dt()) {
-      next_check += check_interval_;
-      dem_->complete_step();
-      stats = dem_->stats();
-      cross_rank_contacts += stats.cross_rank_contacts;
-      check_health(stats, opt);
-      if (finished(stats)) break;
-    }
-    if (dem_->time() >= next_snapshot - 0.5 * dem_->dt()) {
-      auto t = dem_->timers().scope("output");
-      snapshots.write(*dem_);
-      next_snapshot += snapshot_interval_;
-    }
-    if (dem_->time() >= next_checkpoint - 0.5 * dem_->dt()) {
-      auto t = dem_->timers().scope("output");
-      write_checkpoint(opt.output_dir + "/checkpoint.h5", *dem_, extras());
-      next_checkpoint += checkpoint_interval_;
-    }
-    if (dem_->steps() % poll_every == 0) {
-      const RunPoll poll = poll_run(comm, root, wall(), last_progress, progress_interval_);
-      if (poll.stop) {
-        status = "interrupted";
-        break;
-      }
-      if (poll.progress) {
-        last_progress = wall();
-        dem_->complete_step();
-        stats = dem_->stats();
-        if (root && !opt.quiet) {
-          const double rate = static_cast<double>(dem_->steps() - start_steps) / std::max(1e-9, wall());
-          std::printf("step %ld  t %.5g s  KE %.3g J  Z %.2f  max|v| %.3g m/s  %.3g steps/s  wall %.1f s",
-                      dem_->steps(), dem_->time(), stats.kinetic_translational + stats.kinetic_rotational,
-                      stats.bodies ? 2.0 * stats.body_contacts / stats.bodies : 0.0, stats.max_speed, rate, wall());
-          if (end_time_) std::printf("  ETA %.0f s", (*end_time_ - dem_->time()) / dem_->dt() / std::max(rate, 1e-9));
-          std::printf("\n");
-          std::fflush(stdout);
-        }
-      }
-    }
-  }
+bool DemScene::after_step(const RunOptions& opt) {
+  if (!checks_.due(dem_->time(), dem_->dt())) return false;
   dem_->complete_step();
-  MPI_Barrier(comm);
-  loop_seconds = wall() - loop_start;
-  {
-    auto t = dem_->timers().scope("output");
-    write_checkpoint(opt.output_dir + "/checkpoint.h5", *dem_, extras());
-    if (snapshot_interval_ > 0) snapshots.write(*dem_);
-  }
-  finish(opt);
-  stats = dem_->stats();
+  const DemStats stats = dem_->stats();
+  cross_rank_contacts_ += stats.cross_rank_contacts;
+  check_health(stats, opt);
+  return finished(stats);
+}
 
+void DemScene::write_snapshot() { snapshots_->write(*dem_); }
+
+void DemScene::write_checkpoint(const std::string& path) { tessera::write_checkpoint(path, *dem_, extras()); }
+
+std::string DemScene::progress() {
+  dem_->complete_step();
+  const DemStats stats = dem_->stats();
+  char line[160];
+  std::snprintf(line, sizeof line, "KE %.3g J  Z %.2f  max|v| %.3g m/s",
+                stats.kinetic_translational + stats.kinetic_rotational,
+                stats.bodies ? 2.0 * stats.body_contacts / stats.bodies : 0.0, stats.max_speed);
+  return line;
+}
+
+void DemScene::end_output(const RunOptions& opt) {
+  dem_->complete_step();
+  write_checkpoint(opt.output_dir + "/checkpoint.h5");
+  if (snapshot_interval_ > 0) snapshots_->write(*dem_);
+  finish(opt);
+}
+
+void DemScene::summarise(nlohmann::json& s) {
+  MPI_Comm comm = decomp_->comm();
+  const DemStats stats = dem_->stats();
   nlohmann::json q;
   q["bodies"] = stats.bodies;
   q["kinetic_energy"] = stats.kinetic_translational + stats.kinetic_rotational;
@@ -201,15 +156,6 @@ nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolv
   if (dem_->shaped()) q["touching_contact_sphere_pairs"] = stats.contacts;
   quantities(q);
 
-  nlohmann::json s;
-  s["code_version"] = kTesseraVersion;
-  s["scene"] = name();
-  s["status"] = status;
-  s["ranks"] = decomp_->size();
-  s["process_grid"] = decomp_->dims();
-  s["steps"] = dem_->steps();
-  s["steps_this_run"] = dem_->steps() - start_steps;
-  s["time"] = dem_->time();
   s["dt"] = dem_->dt();
   s["contact_law"] = dem_->model().law_name();
   s["neighbor_list_builds"] = dem_->list_builds();
@@ -220,15 +166,7 @@ nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolv
   s["halo_bytes_sent"] = counts[1];  // ghost and migration traffic, all ranks, this run
   s["migrations"] = counts[2];       // bodies that changed owner, this run
   // Touching pairs whose bodies have different owners, summed over the run.check_interval checks.
-  s["cross_rank_contacts_checked"] = cross_rank_contacts;
-  double wall_s = wall();
-  MPI_Bcast(&wall_s, 1, MPI_DOUBLE, 0, comm);
-  s["wall_seconds"] = wall_s;
-  MPI_Bcast(&loop_seconds, 1, MPI_DOUBLE, 0, comm);
-  s["loop_seconds"] = loop_seconds;
-  s["body_steps_per_second_per_core"] = static_cast<double>(stats.bodies) *
-                                        static_cast<double>(dem_->steps() - start_steps) /
-                                        std::max(loop_seconds, 1e-9) / decomp_->size();
+  s["cross_rank_contacts_checked"] = cross_rank_contacts_;
   s["quantities"] = q;
   // Mesh walls: the load the bodies put on each at the last step, and a pivot's angle and speed.
   dem_->sum_mesh_loads();
@@ -257,14 +195,9 @@ nlohmann::json DemScene::run(const RunOptions& opt, const nlohmann::json& resolv
                          {"mass", b.mass}});
     s["free_spheres"] = spheres;
   }
-  nlohmann::json timers;
-  for (const auto& [phase, st] : dem_->timers().reduce(comm))
-    timers[phase] = {{"min", st.min}, {"avg", st.avg}, {"max", st.max}};
-  s["timers"] = timers;
-  s["case"] = resolved_case;
-  s["output"] = {{"checkpoint", "checkpoint.h5"}, {"snapshots", snapshots.count() ? "snapshots/particles.xmf" : ""}};
-  if (root) write_file_atomically(opt.output_dir + "/summary.json", s.dump(2) + "\n");
-  return s;
+  s["body_steps_per_second_per_core"] = static_cast<double>(stats.bodies) * s["steps_this_run"].get<double>() /
+                                        std::max(s["loop_seconds"].get<double>(), 1e-9) / decomp_->size();
+  s["output"] = {{"checkpoint", "checkpoint.h5"}, {"snapshots", snapshots_->count() ? "snapshots/particles.xmf" : ""}};
 }
 
 SettleCriterion::SettleCriterion(const ConfigNode& section, bool required) {

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
-// A dry scene: a DEM in a box, run in a loop that writes snapshots, checkpoints (also on SIGTERM or
-// SIGUSR1, a batch queue's warning), a progress line on rank 0 and DIR/summary.json.
-// Concrete scenes create their bodies, say when they are done and report their quantities.
+// A dry scene: a DEM in a box, run by the shared run loop (app/run_loop.hpp: snapshots,
+// checkpoints, signals, progress, summary.json); every run.check_interval it checks the state's
+// health and asks the scene whether it is done. Concrete scenes create their bodies, say when they
+// are done and report their quantities.
 //
 // Case sections read here: domain, solid, run, output. All keys are read in the constructor, so
 // that bad input stops the run before any output is written.
@@ -13,6 +14,7 @@
 #include <optional>
 #include <string>
 
+#include "app/run_loop.hpp"
 #include "app/scene.hpp"
 #include "core/config.hpp"
 #include "core/decomposition.hpp"
@@ -21,11 +23,9 @@
 
 namespace tessera {
 
-class DemScene : public Scene {
+class DemScene : public SteppedScene {
  public:
   DemScene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir);
-
-  nlohmann::json run(const RunOptions& options, const nlohmann::json& resolved_case) override;
 
   DemSolver& dem() { return *dem_; }
   int rank() const { return decomp_->rank(); }
@@ -41,7 +41,7 @@ class DemScene : public Scene {
   }
   virtual void finish(const RunOptions& options) { (void)options; }
   // After every step (all ranks): per-step quantities (the bunker shot's impulse and release).
-  virtual void after_step(const RunOptions& options) { (void)options; }
+  virtual void on_step(const RunOptions& options) { (void)options; }
   virtual void quantities(nlohmann::json& q) { (void)q; }
   virtual CheckpointExtras extras() const { return {}; }
   virtual void restore(const CheckpointExtras& e) { (void)e; }
@@ -56,12 +56,30 @@ class DemScene : public Scene {
 
   std::unique_ptr<Decomposition> decomp_;
   std::unique_ptr<DemSolver> dem_;
-  std::optional<double> end_time_;
-  std::optional<long> max_steps_;
   double check_interval_ = 0;
   double max_overlap_ratio_ = 0.5;  // blow-up bound, checked every check_interval
-  double snapshot_interval_ = 0, checkpoint_interval_ = 0, progress_interval_ = 10;
   std::string case_dir_;
+
+ private:
+  // The run loop's hooks (app/run_loop.hpp).
+  const Decomposition& decomposition() const override { return *decomp_; }
+  void start(const RunOptions& opt) override;
+  void begin_output(const RunOptions& opt) override;
+  double time() const override { return dem_->time(); }
+  long steps() const override { return dem_->steps(); }
+  double last_dt() const override { return dem_->dt(); }
+  void step(const RunOptions& opt) override;
+  bool after_step(const RunOptions& opt) override;
+  void write_snapshot() override;
+  void write_checkpoint(const std::string& path) override;
+  std::string progress() override;
+  void end_output(const RunOptions& opt) override;
+  void summarise(nlohmann::json& s) override;
+  PhaseTimers& phase_timers() override { return dem_->timers(); }
+
+  std::unique_ptr<SnapshotSeries> snapshots_;
+  Schedule checks_;
+  long cross_rank_contacts_ = 0;  // summed over the checks: evidence that the ranks shared contacts
 };
 
 // When a scene's bodies are at rest: the total kinetic energy below `settled_kinetic_energy` once

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // A scene: what `tessera run` runs. Each builds its solvers from the case in its constructor (every
 // key read there, so bad input stops the run before anything is written), runs to the end, writes
-// DIR/summary.json and returns it. Dry scenes derive from DemScene; the flow scene is FlowScene.
+// DIR/summary.json and returns it. Every scene runs in the shared loop of app/run_loop.hpp
+// (SteppedScene): dry scenes derive from DemScene, the flow scene is FlowScene.
 #pragma once
 #include <mpi.h>
 

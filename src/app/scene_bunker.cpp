@@ -93,7 +93,7 @@ class BunkerShotScene final : public DemScene {
   }
   bool continues_state() const override { return true; }
 
-  void after_step(const RunOptions& opt) override {
+  void on_step(const RunOptions& opt) override {
     const MeshWall& club = dem_->walls().meshes().back();
     const FreeSphere& ball = dem_->free_spheres()[static_cast<std::size_t>(ball_)];
     impulse_ += club.force.z * dem_->dt();

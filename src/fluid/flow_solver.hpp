@@ -30,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "core/config.hpp"
 #include "core/decomposition.hpp"
 #include "core/timers.hpp"
 #include "fluid/fluid_grid.hpp"
@@ -59,6 +60,9 @@ struct FlowSettings {
   enum class WallModel { laminar, spalding };
   WallModel wall_model = WallModel::laminar;
   PoissonSettings poisson;
+
+  // From the case's `fluid` section (every key checked; errors name the key).
+  static FlowSettings from_config(const ConfigNode& fluid);
 };
 
 struct FlowStepStats {

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The flow solver's uniform Cartesian grid on a PETSc DMDA (docs/design.md, "Fluid grid").
+// The flow solver's uniform Cartesian grid on a PETSc DMDA (docs/design.md, "One flow step": grid and ranks).
 //
 // Cells of size dx x dy x dz over the domain box. The DMDA's process grid and ownership ranges are
 // the DEM's (src/core/decomposition.hpp): a rank owns the cells whose centres lie in its sub-box,

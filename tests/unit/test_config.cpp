@@ -195,5 +195,34 @@ TEST(Config, BedSettleKeysComeTogether) {
   EXPECT_NE(error({"bed.settled_kinetic_energy=-1 J"}).find("bed.settled_kinetic_energy"), std::string::npos);
 }
 
+#if defined(TESSERA_HAVE_PETSC)
+// One output vocabulary for every scene: the flow scene reads output.snapshot_interval, as the dry
+// scenes do; its old name field_interval still reads (with a warning at run time), both is an error.
+TEST(Config, FlowSceneSharesTheOutputKeys) {
+  const std::string dam = std::string(TESSERA_SOURCE_DIR) + "/cases/dam_break/martin_moyce.yaml";
+  auto error = [&](const std::vector<std::string>& sets) {
+    return error_of([&] {
+      Config c = Config::load(dam, sets);
+      auto s = make_scene(c.root(), MPI_COMM_WORLD, ".");
+      c.check_unused();
+    });
+  };
+  EXPECT_EQ(error({"output.snapshot_interval=0.1"}), "");
+  EXPECT_EQ(error({"output.snapshot_interval=0", "output.field_interval=0.1"}).find("output.field_interval") !=
+                std::string::npos,
+            true);
+  Config old = Config::parse(
+      "scene: flow\ndomain: {box_min: [0, 0, 0], box_max: [1, 1, 1]}\n"
+      "fluid: {cells: [4, 4, 4], liquid: {density: 1000, viscosity: 1e-3},"
+      " gas: {density: 1, viscosity: 1e-5}}\n"
+      "run: {end_time: 0.01}\noutput: {field_interval: 0.005}\n");
+  EXPECT_EQ(error_of([&] {
+              auto s = make_scene(old.root(), MPI_COMM_WORLD, ".");
+              old.check_unused();
+            }),
+            "");
+}
+#endif
+
 }  // namespace
 }  // namespace tessera

@@ -319,7 +319,7 @@ TEST(WallLaw, SpaldingInverseAndBottomCellDrag) {
 TEST(DropImpact, SeedDropThroughImpactOnFloorAndPool) {
   for (const char* name : {"seed_floor", "seed_pool"}) {
     Config c = Config::load(std::string(TESSERA_SOURCE_DIR) + "/cases/drop_impact/" + name + ".yaml",
-                            {"fluid.cells=[32,32,24]", "run.end_time=1.5 ms", "output.field_interval=0"});
+                            {"fluid.cells=[32,32,24]", "run.end_time=1.5 ms", "output.snapshot_interval=0"});
     auto scene = make_scene(c.root(), MPI_COMM_WORLD, ".");
     c.check_unused();
     RunOptions opt;
@@ -348,7 +348,7 @@ TEST(DropImpact, SeedDropThroughImpactOnFloorAndPool) {
 // widths differ by up to 4 %: 0.13 leaves 2 % of room over Tessera's measured value.
 TEST(DamBreak, MartinMoyceFront) {
   Config c =
-      Config::load(std::string(TESSERA_SOURCE_DIR) + "/cases/dam_break/martin_moyce.yaml", {"output.field_interval=0"});
+      Config::load(std::string(TESSERA_SOURCE_DIR) + "/cases/dam_break/martin_moyce.yaml", {"output.snapshot_interval=0"});
   auto scene = make_scene(c.root(), MPI_COMM_WORLD, ".");
   c.check_unused();
   RunOptions opt;
@@ -398,7 +398,7 @@ TEST(FlowErrors, PoissonFailureStopsWithDumpAndBadInputIsRefused) {
   {
     Config c = Config::load(std::string(TESSERA_SOURCE_DIR) + "/cases/drop_impact/seed_pool.yaml",
                             {"fluid.cells=[16,16,12]", "fluid.poisson.max_iterations=1", "fluid.poisson.rtol=1e-14",
-                             "output.field_interval=0"});
+                             "output.snapshot_interval=0"});
     auto scene = make_scene(c.root(), MPI_COMM_WORLD, ".");
     c.check_unused();
     RunOptions opt;

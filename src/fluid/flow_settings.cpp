@@ -1,0 +1,66 @@
+// SPDX-License-Identifier: MIT
+// The case file's `fluid` section, read into FlowSettings (keys: README, section Flow).
+#include "fluid/flow_solver.hpp"
+
+namespace tessera {
+
+namespace {
+
+BoundaryKind boundary_kind(const ConfigNode& n, const std::string& key) {
+  const std::string k = n.choice(key, {"no_slip", "free_slip", "outflow", "periodic"}, "no_slip");
+  if (k == "free_slip") return BoundaryKind::free_slip;
+  if (k == "outflow") return BoundaryKind::outflow;
+  if (k == "periodic") return BoundaryKind::periodic;
+  return BoundaryKind::no_slip;
+}
+
+}  // namespace
+
+FlowSettings FlowSettings::from_config(const ConfigNode& fluid) {
+  FlowSettings s;
+  const auto cells = fluid.integers("cells", 3, 1, 1 << 16);
+  s.cells = {int(cells[0]), int(cells[1]), int(cells[2])};
+  const ConfigNode liquid = fluid.section("liquid"), gas = fluid.section("gas");
+  s.liquid = {liquid.real("density", Dim::density, Range::positive()),
+              liquid.real("viscosity", Dim::viscosity, Range::non_negative())};
+  s.gas = {gas.real("density", Dim::density, Range::positive()),
+           gas.real("viscosity", Dim::viscosity, Range::non_negative())};
+  s.gravity = fluid.vec3("gravity", Dim::acceleration, Vec3{0, 0, -9.81});
+  if (const auto b = fluid.optional_section("boundaries")) {
+    const char* names[3][2] = {{"x_low", "x_high"}, {"y_low", "y_high"}, {"z_low", "z_high"}};
+    for (int d = 0; d < 3; ++d) {
+      for (int side = 0; side < 2; ++side) s.boundaries[d][side] = boundary_kind(*b, names[d][side]);
+      if ((s.boundaries[d][0] == BoundaryKind::periodic) != (s.boundaries[d][1] == BoundaryKind::periodic))
+        b->fail(names[d][1], std::string("periodic on both sides of ") + "xyz"[d] + " or on neither");
+    }
+  }
+  s.wall_model = fluid.choice("wall_model", {"laminar", "spalding"}, "laminar") == "spalding"
+                     ? FlowSettings::WallModel::spalding
+                     : FlowSettings::WallModel::laminar;
+  if (const auto t = fluid.optional_section("time_step")) {
+    s.cfl = t->real("cfl", Dim::none, Range{0.0, 0.5, true, false}, s.cfl);
+    s.viscous_number = t->real("viscous_number", Dim::none, Range{0.0, 1.0, true, false}, s.viscous_number);
+    s.gravity_number = t->real("gravity_number", Dim::none, Range::positive(), s.gravity_number);
+    s.dt_max = t->real("max", Dim::time, Range::positive(), s.dt_max);
+    s.dt_min = t->real("min", Dim::time, Range::positive(), s.dt_min);
+    s.dt_growth = t->real("growth", Dim::none, Range{1.0, 10.0, false, false}, s.dt_growth);
+  }
+  if (const auto p = fluid.optional_section("poisson")) {
+    s.poisson.rtol = p->real("rtol", Dim::none, Range{0.0, 1.0, true, true}, s.poisson.rtol);
+    s.poisson.atol = p->real("atol", Dim::none, Range::non_negative(), s.poisson.atol);
+    s.poisson.max_iterations = int(p->integer("max_iterations", 1, 100000, s.poisson.max_iterations));
+    s.poisson.reuse_preconditioner = int(p->integer("reuse_preconditioner", 1, 100000, s.poisson.reuse_preconditioner));
+    s.poisson.petsc_options = p->text("petsc_options", "");
+    s.poisson.geometric_multigrid = p->choice("preconditioner", {"multigrid", "petsc"}, "multigrid") == "multigrid";
+    if (const auto mg = p->optional_section("multigrid")) {
+      s.poisson.pre_sweeps = int(mg->integer("pre_sweeps", 0, 20, s.poisson.pre_sweeps));
+      s.poisson.post_sweeps = int(mg->integer("post_sweeps", 0, 20, s.poisson.post_sweeps));
+      s.poisson.coarse_sweeps = int(mg->integer("coarse_sweeps", 2, 1000, s.poisson.coarse_sweeps));
+      if (s.poisson.pre_sweeps != s.poisson.post_sweeps)
+        mg->fail("post_sweeps", "equal to pre_sweeps (CG needs a symmetric preconditioner)");
+    }
+  }
+  return s;
+}
+
+}  // namespace tessera
