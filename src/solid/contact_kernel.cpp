@@ -17,7 +17,7 @@ inline void evaluate(ContactLanes& L, std::size_t count, double dt) {
       delta = L.ra[j] + L.rb[j] - r;
     }
     const Vec3 v_rel = Vec3{L.vx[j], L.vy[j], L.vz[j]} - cross(Vec3{L.wx[j], L.wy[j], L.wz[j]}, nrm);
-    const double c[5] = {L.coef[0][j], L.coef[1][j], L.coef[2][j], L.coef[3][j], L.coef[4][j]};
+    const typename Law::Coefficients c{L.coef[0][j], L.coef[1][j], L.coef[2][j], L.coef[3][j], L.coef[4][j]};
     Vec3 xi{L.hx[j], L.hy[j], L.hz[j]};
     const Vec3 force = contact_force<Law>(c, delta, nrm, v_rel, dt, xi);
     const Vec3 nf = cross(nrm, force);
@@ -50,20 +50,19 @@ TESSERA_CLONES void evaluate_hertz_wall(ContactLanes& lanes, std::size_t count, 
   evaluate<HertzMindlin, true>(lanes, count, dt);
 }
 
+// Each law's clones, by overload (the registry, with_law, picks the law).
+using Kernel = void (*)(ContactLanes&, std::size_t, double);
+Kernel kernel(LinearSpringDashpot, bool wall) { return wall ? evaluate_linear_wall : evaluate_linear; }
+Kernel kernel(HertzMindlin, bool wall) { return wall ? evaluate_hertz_wall : evaluate_hertz; }
+
 }  // namespace
 
 void evaluate_contacts(LawKind law, ContactLanes& lanes, std::size_t count, double dt) {
-  if (law == LawKind::linear_spring_dashpot)
-    evaluate_linear(lanes, count, dt);
-  else
-    evaluate_hertz(lanes, count, dt);
+  with_law(law, [&](auto l) { kernel(l, false)(lanes, count, dt); });
 }
 
 void evaluate_wall_contacts(LawKind law, ContactLanes& lanes, std::size_t count, double dt) {
-  if (law == LawKind::linear_spring_dashpot)
-    evaluate_linear_wall(lanes, count, dt);
-  else
-    evaluate_hertz_wall(lanes, count, dt);
+  with_law(law, [&](auto l) { kernel(l, true)(lanes, count, dt); });
 }
 
 }  // namespace tessera

@@ -19,8 +19,12 @@ struct ContactLanes {
   alignas(64) double dx[width], dy[width], dz[width], ra[width], rb[width];
   alignas(64) double vx[width], vy[width], vz[width], wx[width], wy[width], wz[width];
   alignas(64) double hx[width], hy[width], hz[width];
-  alignas(64) double coef[5][width];
+  alignas(64) double coef[ContactCoefficients::count][width];
   alignas(64) double fx[width], fy[width], fz[width], nx[width], ny[width], nz[width];
+
+  void set_coefficients(std::size_t lane, const ContactCoefficients& c) {
+    for (int q = 0; q < ContactCoefficients::count; ++q) coef[q][lane] = c.value[q];
+  }
 };
 
 // Body-body contacts: lanes hold d = x_a - x_b, R_a, R_b.

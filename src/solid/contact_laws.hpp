@@ -20,7 +20,10 @@
 // Damping: D = D_abs + D_rate m* + 2 zeta sqrt(m* k), which covers the seed's absolute D (N s/m),
 // LAMMPS' rate form (gamma m*, 1/s) and a restitution coefficient (zeta, T5).
 #pragma once
+#include <algorithm>
+#include <bit>
 #include <cmath>
+#include <numbers>
 
 #include "core/vec3.hpp"
 
@@ -37,41 +40,76 @@ struct PairParams {
 
 // Per-pair constants of a law, computed once per neighbour-list build (they depend on the pair's
 // materials, m* and R* only), so that a contact evaluation needs no table look-up, division or
-// square root beyond the geometry's.
+// square root beyond the geometry's. Each law names its own (Law::Coefficients, five doubles);
+// the solver stores any law's in this common slot and the kernel gathers them into lanes.
 struct ContactCoefficients {
-  double c[5];
+  static constexpr int count = 5;
+  double value[count];
+  template <class Law>
+  static ContactCoefficients of(const typename Law::Coefficients& c) {
+    static_assert(sizeof(typename Law::Coefficients) == sizeof(ContactCoefficients));
+    return std::bit_cast<ContactCoefficients>(c);
+  }
+  template <class Law>
+  typename Law::Coefficients as() const {
+    return std::bit_cast<typename Law::Coefficients>(*this);
+  }
 };
 
-// T1: c = {k_n, D_n, k_t, D_t, mu}
+// A law (T1-T7) is a type with: `name` (its case-file name), `Coefficients` (five named doubles,
+// friction last), `coefficients(PairParams, m*, R*)`, `evaluate(c, delta, v_n, F_n, k_t, D_t)` and
+// `contact_duration(PairParams, m*, R*, v)` (T6), `needs_elastic_moduli`. A new law is one more such type here and one
+// line in with_law (contact_model.hpp).
+
+// T1, T5.
 struct LinearSpringDashpot {
   static constexpr const char* name = "hooke";
-  static ContactCoefficients coefficients(const PairParams& p, double meff, double /*reff*/) {
+  static constexpr bool needs_elastic_moduli = false;  // stiffnesses per material pair
+  struct Coefficients {
+    double normal_stiffness, normal_damping, tangential_stiffness, tangential_damping, friction;
+  };
+  static Coefficients coefficients(const PairParams& p, double meff, double /*reff*/) {
     const double dn = p.dn_abs + p.dn_rate * meff + 2.0 * p.dn_zeta * std::sqrt(meff * p.normal_stiffness);
     const double dt = p.dt_abs + p.dt_rate * meff + 2.0 * p.dt_zeta * std::sqrt(meff * p.tangential_stiffness);
-    return {{p.normal_stiffness, dn, p.tangential_stiffness, dt, p.friction}};
+    return {p.normal_stiffness, dn, p.tangential_stiffness, dt, p.friction};
   }
-  static void evaluate(const double* c, double delta, double vn, double& fn, double& kt, double& gt) {
-    fn = c[0] * delta - c[1] * vn;
-    kt = c[2];
-    gt = c[3];
+  static void evaluate(const Coefficients& c, double delta, double vn, double& fn, double& kt, double& gt) {
+    fn = c.normal_stiffness * delta - c.normal_damping * vn;
+    kt = c.tangential_stiffness;
+    gt = c.tangential_damping;
+  }
+  // pi / (w0 sqrt(1 - zeta^2)) with the pair's damping ratio at this m* (T6).
+  static double contact_duration(const PairParams& p, double meff, double /*reff*/, double /*speed*/) {
+    const double w0 = std::sqrt(p.normal_stiffness / meff);
+    const double dn = p.dn_abs + p.dn_rate * meff + 2.0 * p.dn_zeta * std::sqrt(meff * p.normal_stiffness);
+    const double zeta = dn / (2.0 * std::sqrt(meff * p.normal_stiffness));
+    return std::numbers::pi / (w0 * std::sqrt(std::max(1e-12, 1.0 - zeta * zeta)));
   }
 };
 
-// T2: c = {K, alpha sqrt(m* K), 8 G* sqrt(R*), alpha sqrt(m* 8 G* sqrt(R*)), mu}, so that
-// F_n = max(0, c0 delta^(3/2) - c1 delta^(1/4) v_n), k_t = c2 delta^(1/2), D_t = c3 delta^(1/4).
+// T2: F_n = max(0, K delta^(3/2) - D delta^(1/4) v_n), k_t = S delta^(1/2), D_t = G delta^(1/4)
+// with K = 4/3 E* sqrt(R*), D = alpha sqrt(m* K), S = 8 G* sqrt(R*), G = alpha sqrt(m* S).
 struct HertzMindlin {
   static constexpr const char* name = "hertz_mindlin";
-  static ContactCoefficients coefficients(const PairParams& p, double meff, double reff) {
+  static constexpr bool needs_elastic_moduli = true;  // E and nu per material
+  struct Coefficients {
+    double hertz_stiffness, normal_damping_factor, mindlin_stiffness, tangential_damping_factor, friction;
+  };
+  static Coefficients coefficients(const PairParams& p, double meff, double reff) {
     const double k_hertz = (4.0 / 3.0) * p.e_star * std::sqrt(reff);
     const double k_mindlin = 8.0 * p.g_star * std::sqrt(reff);
-    return {{k_hertz, p.hertz_alpha * std::sqrt(meff * k_hertz), k_mindlin, p.hertz_alpha * std::sqrt(meff * k_mindlin),
-             p.friction}};
+    return {k_hertz, p.hertz_alpha * std::sqrt(meff * k_hertz), k_mindlin, p.hertz_alpha * std::sqrt(meff * k_mindlin),
+            p.friction};
   }
-  static void evaluate(const double* c, double delta, double vn, double& fn, double& kt, double& gt) {
+  static void evaluate(const Coefficients& c, double delta, double vn, double& fn, double& kt, double& gt) {
     const double sd = std::sqrt(delta), qd = std::sqrt(sd);
-    fn = std::max(0.0, c[0] * delta * sd - c[1] * qd * vn);
-    kt = c[2] * sd;
-    gt = c[3] * qd;
+    fn = std::max(0.0, c.hertz_stiffness * delta * sd - c.normal_damping_factor * qd * vn);
+    kt = c.mindlin_stiffness * sd;
+    gt = c.tangential_damping_factor * qd;
+  }
+  // 2.87 (m*^2 / (R* E*^2 v))^(1/5) (T6).
+  static double contact_duration(const PairParams& p, double meff, double reff, double speed) {
+    return 2.87 * std::pow(meff * meff / (reff * p.e_star * p.e_star * speed), 0.2);
   }
 };
 
@@ -79,7 +117,8 @@ struct HertzMindlin {
 // without branches (selects only) so that a loop over contacts vectorises; every lane computes
 // exactly what a scalar call would, so results do not depend on the vector width.
 template <class Law>
-inline Vec3 contact_force(const double* c, double delta, const Vec3& n, const Vec3& v_rel, double dt, Vec3& xi) {
+inline Vec3 contact_force(const typename Law::Coefficients& c, double delta, const Vec3& n, const Vec3& v_rel,
+                          double dt, Vec3& xi) {
   const double vn = dot(v_rel, n);
   const Vec3 vt = v_rel - n * vn;
   double fn = 0, kt = 0, gt = 0;
@@ -94,7 +133,7 @@ inline Vec3 contact_force(const double* c, double delta, const Vec3& n, const Ve
   const double factor = t < 1e-6 ? 1.0 + t * (0.5 - 0.125 * t) : std::sqrt(1.0 + t);
   xi = projected * factor + vt * dt;
   Vec3 ft = -(xi * kt + vt * gt);
-  const double limit = c[4] * std::fabs(fn);
+  const double limit = c.friction * std::fabs(fn);
   const double ft2 = norm2(ft);
   const bool slide = ft2 > limit * limit;
   const double scale = slide ? limit / std::sqrt(ft2 > 0.0 ? ft2 : 1.0) : 1.0;

@@ -31,14 +31,18 @@ ContactModel::ContactModel(LawKind law, std::vector<Material> materials) : law_(
 ContactModel::ContactModel(const ConfigNode& solid) {
   const ConfigNode mats = solid.section("materials");
   const ConfigNode contact = solid.section("contact");
-  const std::string law = contact.choice("law", {"hooke", "hertz_mindlin"});
-  law_ = law == "hooke" ? LawKind::linear_spring_dashpot : LawKind::hertz_mindlin;
+  std::vector<std::string> names;
+  for (const LawKind k : kAllLaws) names.push_back(with_law(k, [](auto law) { return std::string(law.name); }));
+  const std::string law = contact.choice("law", names);
+  for (const LawKind k : kAllLaws)
+    if (law == names[static_cast<std::size_t>(k)]) law_ = k;
+  const bool moduli = with_law(law_, [](auto l) { return decltype(l)::needs_elastic_moduli; });
   for (const auto& name : mats.keys()) {
     const ConfigNode m = mats.section(name);
     Material mat;
     mat.name = name;
     mat.density = m.real("density", Dim::density, Range::positive());
-    if (law_ == LawKind::hertz_mindlin) {
+    if (moduli) {
       mat.youngs_modulus = m.real("youngs_modulus", Dim::pressure, Range::positive());
       mat.poisson_ratio = m.real("poisson_ratio", Dim::none, Range::half_open(-1.0, 0.5));
     }
@@ -60,7 +64,7 @@ ContactModel::ContactModel(const ConfigNode& solid) {
 }
 
 const char* ContactModel::law_name() const {
-  return law_ == LawKind::linear_spring_dashpot ? LinearSpringDashpot::name : HertzMindlin::name;
+  return with_law(law_, [](auto law) { return law.name; });
 }
 
 int ContactModel::material_index(const std::string& name, const std::string& key) const {
@@ -79,11 +83,18 @@ void ContactModel::set_pair(int a, int b, const PairParams& p) {
 }
 
 PairParams ContactModel::read_pair(const ConfigNode& node, int a, int b) const {
+  return with_law(law_, [&](auto law) { return read_pair(law, node, a, b); });
+}
+
+PairParams ContactModel::read_pair(HertzMindlin, const ConfigNode& node, int a, int b) const {
+  const double friction = node.real("friction", Dim::none, Range::non_negative());
+  return hertz_mindlin_pair(materials_[a], materials_[b],
+                            node.real("restitution", Dim::none, Range{0.0, 1.0, true, false}), friction);
+}
+
+PairParams ContactModel::read_pair(LinearSpringDashpot, const ConfigNode& node, int, int) const {
   PairParams p;
   p.friction = node.real("friction", Dim::none, Range::non_negative());
-  if (law_ == LawKind::hertz_mindlin)
-    return hertz_mindlin_pair(materials_[a], materials_[b],
-                              node.real("restitution", Dim::none, Range{0.0, 1.0, true, false}), p.friction);
   p.normal_stiffness = node.real("normal_stiffness", Dim::stiffness, Range::positive());
   p.tangential_stiffness = node.real("tangential_stiffness", Dim::stiffness, Range::non_negative(), p.normal_stiffness);
   const bool by_e = node.has("restitution"), by_abs = node.has("normal_damping"),
@@ -133,14 +144,7 @@ PairParams ContactModel::linear_pair(double kn, double kt, double restitution, d
 }
 
 double ContactModel::contact_duration(int a, int b, double meff, double reff, double v) const {
-  const PairParams& p = pair(a, b);
-  if (law_ == LawKind::linear_spring_dashpot) {
-    const double w0 = std::sqrt(p.normal_stiffness / meff);
-    const double dn = p.dn_abs + p.dn_rate * meff + 2.0 * p.dn_zeta * std::sqrt(meff * p.normal_stiffness);
-    const double zeta = dn / (2.0 * std::sqrt(meff * p.normal_stiffness));
-    return std::numbers::pi / (w0 * std::sqrt(std::max(1e-12, 1.0 - zeta * zeta)));
-  }
-  return 2.87 * std::pow(meff * meff / (reff * p.e_star * p.e_star * v), 0.2);
+  return with_law(law_, [&](auto law) { return law.contact_duration(pair(a, b), meff, reff, v); });
 }
 
 double ContactModel::linear_zeta_for_restitution(double e) {

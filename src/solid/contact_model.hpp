@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Materials and the material-pair table of contact parameters, built from the case file's
-// `solid.materials` and `solid.contact` sections. The law (hooke | hertz_mindlin) is chosen by name;
-// the force loop is compiled once per law (see dem_solver.cpp), never dispatched per contact.
+// `solid.materials` and `solid.contact` sections. The law (hooke | hertz_mindlin) is chosen by name
+// from the registry below; the force loop is compiled once per law, never dispatched per contact.
 #pragma once
 #include <string>
 #include <vector>
@@ -18,7 +18,21 @@ struct Material {
   double poisson_ratio = 0;   // Hertz-Mindlin only
 };
 
+// The registry of contact laws: the one place a law is chosen by kind (at set-up, and once per
+// block of contacts in the kernel; never per contact). with_law calls f with a value of the law's
+// type; a new law is one enumerator here and one case below.
 enum class LawKind { linear_spring_dashpot, hertz_mindlin };
+template <class F>
+decltype(auto) with_law(LawKind kind, F&& f) {
+  switch (kind) {
+    case LawKind::linear_spring_dashpot:
+      return f(LinearSpringDashpot{});
+    case LawKind::hertz_mindlin:
+      return f(HertzMindlin{});
+  }
+  return f(LinearSpringDashpot{});  // unreachable: every kind is a case above
+}
+inline constexpr LawKind kAllLaws[] = {LawKind::linear_spring_dashpot, LawKind::hertz_mindlin};
 
 class ContactModel {
  public:
@@ -52,7 +66,9 @@ class ContactModel {
   static double linear_zeta_for_restitution(double e);
 
  private:
-  PairParams read_pair(const ConfigNode& node, int a, int b) const;
+  PairParams read_pair(const ConfigNode& node, int a, int b) const;  // the law's keys
+  PairParams read_pair(LinearSpringDashpot, const ConfigNode& node, int a, int b) const;
+  PairParams read_pair(HertzMindlin, const ConfigNode& node, int a, int b) const;
   LawKind law_;
   std::vector<Material> materials_;
   std::vector<PairParams> table_;

@@ -105,7 +105,7 @@ void DemSolver::compute_free_sphere_forces(double dt) {
     L.wz[nb] = mo[e].wz * g[e].r + s.omega.z * s.radius;
     L.hx[nb] = h[0], L.hy[nb] = h[1], L.hz[nb] = h[2];
     const ContactCoefficients& cs = sets[free_coefficient_[k]];
-    for (int q = 0; q < 5; ++q) L.coef[q][nb] = cs.c[q];
+    L.set_coefficients(nb, cs);
     sphere[nb] = b, entity[nb] = e;
     if (++nb == W) flush();
   }
@@ -161,7 +161,7 @@ void DemSolver::compute_free_sphere_wall_forces(double dt) {
         L.wx[j] = s.omega.x * s.radius, L.wy[j] = s.omega.y * s.radius, L.wz[j] = s.omega.z * s.radius;
         const std::array<double, 3> h = spring_or_zero(free_hist_, t.key);
         L.hx[j] = h[0], L.hy[j] = h[1], L.hz[j] = h[2];
-        for (int q = 0; q < 5; ++q) L.coef[q][j] = sets[t.coefficient].c[q];
+        L.set_coefficients(j, sets[t.coefficient]);
       }
       evaluate_wall_contacts(model_.law(), L, nb, dt);
       for (std::size_t j = 0; j < nb; ++j) {

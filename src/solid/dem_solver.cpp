@@ -646,7 +646,7 @@ void DemSolver::compute_mesh_forces(double dt) {
       const std::array<double, 3> h = spring_or_zero(mesh_hist_, keys[nb]);
       L.hx[nb] = h[0], L.hy[nb] = h[1], L.hz[nb] = h[2];
       const ContactCoefficients& cs = sets[mesh_coefficient_[k]];
-      for (int q = 0; q < 5; ++q) L.coef[q][nb] = cs.c[q];
+      L.set_coefficients(nb, cs);
     }
     if (nb == 0) continue;
     evaluate_wall_contacts(model_.law(), L, nb, dt);
@@ -747,10 +747,7 @@ void DemSolver::refresh_moving_candidates() {
 void DemSolver::find_moving_candidates() {
   build_mesh_candidates();
   build_free_sphere_candidates();
-  if (model_.law() == LawKind::linear_spring_dashpot)
-    fill_pair_coefficients<LinearSpringDashpot>();
-  else
-    fill_pair_coefficients<HertzMindlin>();
+  with_law(model_.law(), [&](auto law) { fill_pair_coefficients<decltype(law)>(); });
 }
 
 void DemSolver::integrate_first() {
@@ -1005,7 +1002,9 @@ void DemSolver::fill_pair_coefficients() {
   auto lookup = [&](const Key& key) {
     if (key == last) return last_index;  // neighbours in a list are often alike: skip the hash
     const auto [it, added] = index.emplace(key, static_cast<std::int32_t>(coefficient_sets_.size()));
-    if (added) coefficient_sets_.push_back(Law::coefficients(model_.pair(key.ma, key.mb), key.meff, key.reff));
+    if (added)
+      coefficient_sets_.push_back(
+          ContactCoefficients::of<Law>(Law::coefficients(model_.pair(key.ma, key.mb), key.meff, key.reff)));
     last = key, last_index = it->second;
     return it->second;
   };
@@ -1027,7 +1026,8 @@ void DemSolver::fill_pair_coefficients() {
       if (k + 1 == probe && 2 * coefficient_sets_.size() > probe) shared = false;
     } else {
       pair_coefficient_[k] = static_cast<std::int32_t>(coefficient_sets_.size());
-      coefficient_sets_.push_back(Law::coefficients(model_.pair(key.ma, key.mb), key.meff, key.reff));
+      coefficient_sets_.push_back(
+          ContactCoefficients::of<Law>(Law::coefficients(model_.pair(key.ma, key.mb), key.meff, key.reff)));
     }
   }
   // Walls: m* = m, R* = R (T7).
@@ -1166,7 +1166,7 @@ void DemSolver::compute_pair_forces(double dt, bool update_history) {
       L.wz[j] = ma.wz * ga.r + mb.wz * gb.r;
       L.hx[j] = hist[3 * k], L.hy[j] = hist[3 * k + 1], L.hz[j] = hist[3 * k + 2];
       const ContactCoefficients& cs = sets[pc[k]];
-      for (int c = 0; c < 5; ++c) L.coef[c][j] = cs.c[c];
+      L.set_coefficients(j, cs);
     }
     evaluate_contacts(model_.law(), L, nb, dt);
     for (std::size_t j = 0; j < nb; ++j) {
@@ -1234,7 +1234,7 @@ void DemSolver::compute_wall_forces(double dt) {
     L.wx[nb] = mi.wx * ri, L.wy[nb] = mi.wy * ri, L.wz[nb] = mi.wz * ri;
     L.hx[nb] = h[0], L.hy[nb] = h[1], L.hz[nb] = h[2];
     const ContactCoefficients& cs = sets[wall_coefficient_[k]];
-    for (int c = 0; c < 5; ++c) L.coef[c][nb] = cs.c[c];
+    L.set_coefficients(nb, cs);
     lane_entry[nb++] = static_cast<std::int32_t>(k);
     if (nb == ContactLanes::width) flush();
   }
