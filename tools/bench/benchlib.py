@@ -1,6 +1,8 @@
 """Shared helpers of the benchmark runners in tools/bench (dem_bed, clump_bed)."""
 import os
 import re
+import shutil
+import statistics
 import subprocess
 import sys
 
@@ -35,3 +37,25 @@ def loop_time(log, name="bench"):
         sys.exit(f"{name}: no 'Loop time' line in a peer log")
     t, procs, steps, atoms = m[-1]
     return float(t), int(procs), int(steps), int(atoms)
+
+
+def ensure(tools, name="bench"):
+    """Installs the Debian packages of the peers a benchmark runs when their commands are missing
+    (as tools/setup.sh does for the build): tools maps a command (or a file path) to its package.
+    Builds Tessera first if its binary is missing."""
+    missing = sorted({pkg for tool, pkg in tools.items()
+                      if not (os.path.exists(tool) if tool.startswith("/") else shutil.which(tool))})
+    if missing:
+        print(f"{name}: installing {' '.join(missing)} (Debian packages)", flush=True)
+        sudo = [] if os.geteuid() == 0 else ["sudo"]
+        env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
+        subprocess.run(sudo + ["apt-get", "update", "-qq"], check=True, env=env)
+        subprocess.run(sudo + ["apt-get", "install", "-y", "-qq", "--no-install-recommends"] + missing, check=True,
+                       env=env, stdout=subprocess.DEVNULL)
+    if not os.path.exists(TESSERA):
+        subprocess.run([os.path.join(ROOT, "tools", "setup.sh"), "build"], check=True)
+
+
+def median_range(values):
+    """'median (min-max)' of repeated timings: the figure to quote is the median."""
+    return statistics.median(values), min(values), max(values)
