@@ -130,7 +130,7 @@ void DemScene::write_snapshot() { snapshots_->write(*dem_); }
 void DemScene::write_checkpoint(const std::string& path) { tessera::write_checkpoint(path, *dem_, extras()); }
 
 std::string DemScene::progress() {
-  dem_->complete_step();
+  dem_->complete_kick();  // not complete_step: progress comes at wall-clock moments (see there)
   const DemStats stats = dem_->stats();
   char line[160];
   std::snprintf(line, sizeof line, "KE %.3g J  Z %.2f  max|v| %.3g m/s",

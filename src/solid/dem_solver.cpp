@@ -12,6 +12,7 @@
 
 #include "core/errors.hpp"
 #include "core/exact_sum.hpp"
+#include "solid/body_order.hpp"
 #include "solid/contact_kernel.hpp"
 #include "solid/triangle_contact.hpp"
 
@@ -200,7 +201,7 @@ void DemSolver::setup(bool fresh) {
                              std::to_string(2 * r_max_ + skin_) + " m (2 r_max + skin)");
   }
 
-  if (fresh) assign_order();
+  if (fresh) assign_morton_order(p_, decomp_);
   rebuild();
   if (fresh) {
     // Forces of the initial state for the first half-kick; histories must not advance here.
@@ -239,84 +240,6 @@ HistoryMap DemSolver::histories() const {
   return h;
 }
 
-void DemSolver::sort_owned_by_order() {
-  auto by_order = [&](std::size_t a, std::size_t b) { return p_.order[a] < p_.order[b]; };
-  std::vector<std::size_t> perm(p_.owned);
-  std::iota(perm.begin(), perm.end(), std::size_t{0});
-  if (std::is_sorted(perm.begin(), perm.end(), by_order)) return;
-  std::sort(perm.begin(), perm.end(), by_order);
-  std::vector<double> buf;
-  buf.reserve(static_cast<std::size_t>(p_.packed_size()) * p_.owned);
-  for (const auto i : perm) p_.pack(i, buf);
-  const std::size_t owned = p_.owned, stride = static_cast<std::size_t>(p_.packed_size());
-  p_.resize(0);
-  for (std::size_t k = 0; k < owned; ++k) p_.unpack_append(&buf[k * stride]);
-  p_.owned = owned;
-  p_.ghosts = 0;
-}
-
-namespace {
-
-// Interleaves the low 21 bits of x, y, z (Morton / Z-order code).
-std::uint64_t morton(std::uint64_t x, std::uint64_t y, std::uint64_t z) {
-  auto spread = [](std::uint64_t v) {
-    v &= 0x1fffff;
-    v = (v | v << 32) & 0x1f00000000ffffULL;
-    v = (v | v << 16) & 0x1f0000ff0000ffULL;
-    v = (v | v << 8) & 0x100f00f00f00f00fULL;
-    v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
-    v = (v | v << 2) & 0x1249249249249249ULL;
-    return v;
-  };
-  return spread(x) | spread(y) << 1 | spread(z) << 2;
-}
-
-}  // namespace
-
-void DemSolver::assign_order() {
-  // Every body's Morton code in the global box, sorted globally with the id breaking ties; a body's
-  // key is its rank in that sort. Gathered on rank 0: 16 bytes per body.
-  MPI_Comm comm = decomp_.comm();
-  const Vec3 lo = decomp_.global_lo(), hi = decomp_.global_hi();
-  std::vector<std::uint64_t> mine(2 * p_.owned);
-  for (std::size_t i = 0; i < p_.owned; ++i) {
-    std::uint64_t q[3];
-    for (int d = 0; d < 3; ++d) {
-      const double t = (p_.x[3 * i + d] - lo[d]) / (hi[d] - lo[d]);
-      q[d] = static_cast<std::uint64_t>(std::clamp(t, 0.0, 1.0) * 2097151.0);
-    }
-    mine[2 * i] = morton(q[0], q[1], q[2]);
-    mine[2 * i + 1] = static_cast<std::uint64_t>(p_.id[i]);
-  }
-  int size = 1, rank = 0, n = static_cast<int>(mine.size());
-  MPI_Comm_size(comm, &size);
-  MPI_Comm_rank(comm, &rank);
-  std::vector<int> counts(size), displs(size, 0), half_counts(size), half_displs(size, 0);
-  MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm);
-  std::vector<std::uint64_t> all;
-  std::vector<std::int64_t> keys;
-  if (rank == 0) {
-    for (int r = 1; r < size; ++r) displs[r] = displs[r - 1] + counts[r - 1];
-    for (int r = 0; r < size; ++r) half_counts[r] = counts[r] / 2, half_displs[r] = displs[r] / 2;
-    all.resize(static_cast<std::size_t>(displs[size - 1] + counts[size - 1]));
-  }
-  MPI_Gatherv(mine.data(), n, MPI_UINT64_T, all.data(), counts.data(), displs.data(), MPI_UINT64_T, 0, comm);
-  if (rank == 0) {
-    const std::size_t total = all.size() / 2;
-    std::vector<std::size_t> perm(total);
-    std::iota(perm.begin(), perm.end(), std::size_t{0});
-    std::sort(perm.begin(), perm.end(), [&](std::size_t a, std::size_t b) {
-      return all[2 * a] != all[2 * b] ? all[2 * a] < all[2 * b] : all[2 * a + 1] < all[2 * b + 1];
-    });
-    keys.resize(total);
-    for (std::size_t k = 0; k < total; ++k) keys[perm[k]] = static_cast<std::int64_t>(k);
-  }
-  std::vector<std::int64_t> my_keys(p_.owned);
-  MPI_Scatterv(keys.data(), half_counts.data(), half_displs.data(), MPI_INT64_T, my_keys.data(),
-               static_cast<int>(p_.owned), MPI_INT64_T, 0, comm);
-  for (std::size_t i = 0; i < p_.owned; ++i) p_.order[i] = my_keys[i];
-}
-
 void DemSolver::rebuild() {
   owned_mirrors_current_ = false;
   fold_turns();  // the orientations travel with their bodies
@@ -350,7 +273,7 @@ void DemSolver::rebuild() {
   {
     auto t = timers_.scope("migration");
     halo_.migrate(p_, histories);
-    sort_owned_by_order();
+    sort_owned_by_order(p_);
   }
   for (const auto& [key, h] : histories)
     if (is_mesh_key(key)) mesh_hist_.emplace(key, h);
@@ -514,188 +437,6 @@ void DemSolver::add_lever(KernelForce& f, const KernelGeometry& g, std::size_t b
   // Torque of an element force about its body's centre: (x_e - x) x F, the arm as the contact saw it.
   const double ax = g.x - p_.x[3 * body], ay = g.y - p_.x[3 * body + 1], az = g.z - p_.x[3 * body + 2];
   f.tx += ay * fz - az * fy, f.ty += az * fx - ax * fz, f.tz += ax * fy - ay * fx;
-}
-
-double DemSolver::mesh_displacement() const {
-  double d2 = 0;
-  const auto& meshes = walls_.meshes();
-  for (std::size_t m = 0; m < meshes.size() && m < mesh_nodes_build_.size(); ++m)
-    for (std::size_t k = 0; k < meshes[m].nodes.size(); ++k)
-      d2 = std::max(d2, norm2(meshes[m].nodes[k] - mesh_nodes_build_[m][k]));
-  return std::sqrt(d2);
-}
-
-void DemSolver::build_mesh_candidates() {
-  // Each owned entity (body, or contact sphere of a shaped body) against each mesh: the triangles
-  // within its radius + skin, found through a grid of the triangles' bounding boxes.
-  mesh_entity_.clear(), mesh_of_.clear(), mesh_cands_.clear();
-  mesh_cand_start_.assign(1, 0);
-  const auto& meshes = walls_.meshes();
-  mesh_nodes_build_.resize(meshes.size());
-  if (meshes.empty()) return;
-  const bool sh = shaped();
-  const std::size_t n = sh ? e_owned_ : p_.owned;
-  auto centre = [&](std::size_t e) {
-    return sh ? Vec3{k_geometry_[e].x, k_geometry_[e].y, k_geometry_[e].z} : p_.pos(e);
-  };
-  auto radius = [&](std::size_t e) { return sh ? e_r_[e] : p_.radius[e]; };
-  double r_max = 0;
-  for (std::size_t e = 0; e < n; ++e) r_max = std::max(r_max, radius(e));
-  std::vector<int> found;
-  for (std::size_t mi = 0; mi < meshes.size(); ++mi) {
-    const MeshWall& m = meshes[mi];
-    mesh_nodes_build_[mi] = m.nodes;
-    Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
-    double edge = 0;
-    for (const auto& t : m.triangles)
-      for (int a = 0; a < 3; ++a) {
-        const Vec3& v = m.nodes[t[a]];
-        for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], v[d]), hi[d] = std::max(hi[d], v[d]);
-        edge = std::max(edge, norm(v - m.nodes[t[(a + 1) % 3]]));
-      }
-    const double reach = r_max + skin_;
-    double h = std::max(2 * reach, 0.5 * edge);
-    int nc[3];
-    for (;;) {
-      double cells = 1;
-      for (int d = 0; d < 3; ++d) cells *= (nc[d] = static_cast<int>((hi[d] - lo[d] + 2 * reach) / h) + 1);
-      if (cells <= 4.0 * static_cast<double>(m.triangles.size()) + 64) break;
-      h *= 1.5;
-    }
-    auto cell = [&](double x, int d) { return std::clamp(static_cast<int>((x - lo[d] + reach) / h), 0, nc[d] - 1); };
-    auto at = [&](int x, int y, int z) { return (static_cast<std::size_t>(z) * nc[1] + y) * nc[0] + x; };
-    std::vector<std::vector<int>> grid(static_cast<std::size_t>(nc[0]) * nc[1] * nc[2]);
-    for (std::size_t t = 0; t < m.triangles.size(); ++t) {
-      int c0[3], c1[3];
-      for (int d = 0; d < 3; ++d) {
-        double a = 1e300, b = -1e300;
-        for (int v = 0; v < 3; ++v) {
-          a = std::min(a, m.nodes[m.triangles[t][v]][d]);
-          b = std::max(b, m.nodes[m.triangles[t][v]][d]);
-        }
-        c0[d] = cell(a, d), c1[d] = cell(b, d);
-      }
-      for (int z = c0[2]; z <= c1[2]; ++z)
-        for (int y = c0[1]; y <= c1[1]; ++y)
-          for (int x = c0[0]; x <= c1[0]; ++x) grid[at(x, y, z)].push_back(static_cast<int>(t));
-    }
-    for (std::size_t e = 0; e < n; ++e) {
-      const Vec3 c = centre(e);
-      const double r = radius(e) + skin_;
-      bool outside = false;
-      for (int d = 0; d < 3; ++d) outside = outside || c[d] + r < lo[d] || c[d] - r > hi[d];
-      if (outside) continue;
-      found.clear();
-      for (int z = cell(c.z - r, 2); z <= cell(c.z + r, 2); ++z)
-        for (int y = cell(c.y - r, 1); y <= cell(c.y + r, 1); ++y)
-          for (int x = cell(c.x - r, 0); x <= cell(c.x + r, 0); ++x)
-            for (const int t : grid[at(x, y, z)]) {
-              TriangleFeature f;
-              const auto& tri = m.triangles[t];
-              const Vec3 q = closest_point_on_triangle(c, m.nodes[tri[0]], m.nodes[tri[1]], m.nodes[tri[2]], f);
-              if (norm2(q - c) < r * r) found.push_back(t);
-            }
-      if (found.empty()) continue;
-      std::sort(found.begin(), found.end());
-      found.erase(std::unique(found.begin(), found.end()), found.end());
-      mesh_entity_.push_back(static_cast<std::int32_t>(e));
-      mesh_of_.push_back(static_cast<std::int32_t>(mi));
-      mesh_cands_.insert(mesh_cands_.end(), found.begin(), found.end());
-      mesh_cand_start_.push_back(static_cast<std::int32_t>(mesh_cands_.size()));
-    }
-  }
-}
-
-void DemSolver::compute_mesh_forces(double dt) {
-  // Per (entity, mesh): the contacts after de-duplication (T11), each through the wall law with
-  // the wall's velocity at the contact point; the reaction goes to the mesh (force, moment about
-  // its origin). Tangential springs are kept by (element key, mesh, contact ordinal): a sphere
-  // rolling over a flat mesh keeps its spring across triangle edges.
-  auto& meshes = walls_.meshes();
-  for (auto& m : meshes) m.force = m.moment = Vec3{};
-  const KernelGeometry* g = k_geometry_.data();
-  const KernelMotion* mo = k_motion_.data();
-  const bool sh = shaped();
-  ContactLanes& L = lanes_;
-  const ContactCoefficients* sets = coefficient_sets_.data();
-  std::vector<int> cands;
-  // The load on each mesh is summed over all contacts in key order, on every rank: the same bits
-  // whatever the decomposition (pivot dynamics stay rank-count independent).
-  std::vector<double>& loads = mesh_loads_;  // per contact: key (2 x 32 bits), mesh, force, moment
-  for (std::size_t k = 0; k < mesh_entity_.size(); ++k) {
-    const std::size_t e = mesh_entity_[k];
-    MeshWall& m = meshes[mesh_of_[k]];
-    const Vec3 c{g[e].x, g[e].y, g[e].z};
-    cands.assign(mesh_cands_.begin() + mesh_cand_start_[k], mesh_cands_.begin() + mesh_cand_start_[k + 1]);
-    const auto contacts = sphere_mesh_contacts(c, g[e].r, m.nodes, m.triangles, cands);
-    if (contacts.empty()) continue;
-    if (sh) element_motion(e);
-    const std::int64_t ekey = sh ? e_key_[e] : p_.order[e];
-    std::size_t nb = 0;
-    std::uint64_t keys[ContactLanes::width];
-    Vec3 points[ContactLanes::width];
-    for (std::size_t j = 0; j < contacts.size() && nb < kMeshContactsPerSphere; ++j, ++nb) {
-      const TriangleContact& tc = contacts[j];
-      const Vec3 vw = m.velocity_at(tc.point);
-      L.dx[nb] = tc.normal.x, L.dy[nb] = tc.normal.y, L.dz[nb] = tc.normal.z;
-      L.ra[nb] = g[e].r, L.rb[nb] = tc.overlap;
-      L.vx[nb] = mo[e].vx - vw.x, L.vy[nb] = mo[e].vy - vw.y, L.vz[nb] = mo[e].vz - vw.z;
-      L.wx[nb] = mo[e].wx * g[e].r, L.wy[nb] = mo[e].wy * g[e].r, L.wz[nb] = mo[e].wz * g[e].r;
-      keys[nb] = mesh_key(ekey, mesh_of_[k], static_cast<int>(j));
-      points[nb] = tc.point;
-      const std::array<double, 3> h = spring_or_zero(mesh_hist_, keys[nb]);
-      L.hx[nb] = h[0], L.hy[nb] = h[1], L.hz[nb] = h[2];
-      const ContactCoefficients& cs = sets[mesh_coefficient_[k]];
-      L.set_coefficients(nb, cs);
-    }
-    if (nb == 0) continue;
-    evaluate_wall_contacts(model_.law(), L, nb, dt);
-    for (std::size_t j = 0; j < nb; ++j) {
-      mesh_hist_next_[keys[j]] = {L.hx[j], L.hy[j], L.hz[j]};
-      add_wall_reaction(e, L, j);
-      const Vec3 f{L.fx[j], L.fy[j], L.fz[j]};
-      const Vec3 moment = cross(points[j] - m.origin, f);
-      loads.insert(loads.end(), {static_cast<double>(keys[j] >> 32), static_cast<double>(keys[j] & 0xffffffffULL),
-                                 static_cast<double>(mesh_of_[k]), -f.x, -f.y, -f.z, -moment.x, -moment.y, -moment.z});
-    }
-  }
-}
-
-void DemSolver::sum_mesh_loads() {
-  // Every rank gets the load on each mesh, summed over all contacts in key order.
-  if (!mesh_loads_pending_) return;
-  mesh_loads_pending_ = false;
-  auto& meshes = walls_.meshes();
-  const std::vector<double>& loads = mesh_loads_;
-  constexpr int stride = 9;
-  int size = 1, mine = static_cast<int>(loads.size());
-  MPI_Comm comm = decomp_.comm();
-  MPI_Comm_size(comm, &size);
-  std::vector<int> counts(size), displs(size, 0);
-  MPI_Allgather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, comm);
-  for (int r = 1; r < size; ++r) displs[r] = displs[r - 1] + counts[r - 1];
-  std::vector<double> all(static_cast<std::size_t>(displs[size - 1] + counts[size - 1]));
-  MPI_Allgatherv(loads.data(), mine, MPI_DOUBLE, all.data(), counts.data(), displs.data(), MPI_DOUBLE, comm);
-  const std::size_t n = all.size() / stride;
-  std::vector<std::size_t> order(n);
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return all[a * stride] != all[b * stride] ? all[a * stride] < all[b * stride]
-                                              : all[a * stride + 1] < all[b * stride + 1];
-  });
-  for (const auto c : order) {
-    const double* r = &all[c * stride];
-    const auto target = static_cast<std::size_t>(r[2]);
-    if (target < meshes.size()) {
-      MeshWall& m = meshes[target];
-      m.force += Vec3{r[3], r[4], r[5]};
-      m.moment += Vec3{r[6], r[7], r[8]};
-    } else {  // a free sphere: moment about its centre
-      FreeSphere& s = free_[target - meshes.size()];
-      s.force += Vec3{r[3], r[4], r[5]};
-      s.torque += Vec3{r[6], r[7], r[8]};
-    }
-  }
 }
 
 bool DemSolver::needs_rebuild() {
@@ -1196,7 +937,7 @@ void DemSolver::compute_wall_forces(double dt) {
   // Walls: bodies near a wall at the last rebuild, in (body, wall) order; same lanes and law.
   const auto& prims = walls_.primitives();
   const std::size_t slots = static_cast<std::size_t>(walls_.slots());
-  wall_entry_force_.assign(3 * wall_body_.size(), 0.0);
+  wall_entry_force_.resize(3 * wall_body_.size());  // every entry is written below
   ContactLanes& L = lanes_;
   std::int32_t lane_entry[ContactLanes::width];
   const ContactCoefficients* sets = coefficient_sets_.data();
@@ -1224,6 +965,8 @@ void DemSolver::compute_wall_forces(double dt) {
     const double delta = prims[s].overlap(Vec3{gi.x, gi.y, gi.z}, ri, nrm);
     if (delta <= 0.0) {
       h[0] = h[1] = h[2] = 0.0;
+      double* load = &wall_entry_force_[3 * k];
+      load[0] = load[1] = load[2] = 0.0;
       continue;
     }
     if (sh) element_motion(i);
@@ -1295,96 +1038,6 @@ void DemSolver::step(bool defer_kick) {
   if (!(std::isfinite(p_.owned ? p_.x[0] : 0.0)))
     throw RunError("non-finite body position at step " + std::to_string(steps_) +
                    ": the time step is too large for the contact stiffness");
-}
-
-DemStats DemSolver::stats() const {
-  if (kick_pending_) throw std::logic_error("DemSolver::stats: a deferred half-kick is pending (complete_step)");
-  // Energies as exact sums (core/exact_sum.hpp): the same bits on any rank count.
-  ExactSum energy[2];
-  double e[3] = {0, 0, 0};
-  // bodies, contacts, wall contacts, non-finite, body pairs, contacts with a ghost
-  long c[6] = {static_cast<long>(p_.owned), 0, 0, 0, 0, 0};
-  struct {
-    double ratio;
-    int body;
-  } worst{0.0, -1};
-  auto note_overlap = [&](double overlap, double radius, std::int64_t id) {
-    if (overlap / radius > worst.ratio) worst = {overlap / radius, static_cast<int>(id)};
-  };
-  for (std::size_t i = 0; i < p_.owned; ++i) {
-    const Vec3 x = p_.pos(i), v = p_.vel(i), w = p_.ang(i);
-    if (!std::isfinite(norm2(x) + norm2(v) + norm2(w))) ++c[3];
-    energy[0] += 0.5 * p_.mass[i] * norm2(v);
-    if (anisotropic(p_.shape[i])) {
-      const Quaternion q{p_.q[4 * i], p_.q[4 * i + 1], p_.q[4 * i + 2], p_.q[4 * i + 3]};
-      const Vec3 wb = q.unrotate(w);
-      double rotational = 0;
-      for (int k = 0; k < 3; ++k) rotational += 0.5 * inertia3_[3 * i + k] * wb[k] * wb[k];
-      energy[1] += rotational;
-    } else {
-      energy[1] += 0.5 * p_.inertia[i] * norm2(w);
-    }
-    e[2] = std::max(e[2], norm(v));
-  }
-  // Contacts between elements (bodies for spheres): positions and radii of elements.
-  const bool sh = shaped();
-  auto ex = [&](std::size_t a) { return sh ? Vec3{k_geometry_[a].x, k_geometry_[a].y, k_geometry_[a].z} : p_.pos(a); };
-  auto er = [&](std::size_t a) { return sh ? e_r_[a] : p_.radius[a]; };
-  auto eid = [&](std::size_t a) { return p_.id[sh ? static_cast<std::size_t>(e_body_[a]) : a]; };
-  const std::size_t owned_elements = sh ? e_owned_ : p_.owned;
-  std::unordered_set<PairKey> touching_bodies;
-  for (std::size_t k = 0; k < list_.size(); ++k) {
-    const auto a = static_cast<std::size_t>(list_.first[k]), b = static_cast<std::size_t>(list_.second[k]);
-    if (a >= owned_elements) continue;  // counted by the owner of the lower-key element
-    const double r = norm(ex(a) - ex(b)), rs = er(a) + er(b);
-    if (r < rs) {
-      ++c[1];
-      if (b >= owned_elements) ++c[5];
-      note_overlap(rs - r, std::min(er(a), er(b)), eid(a));
-      // Body pairs: a body's element keys all precede a higher-order body's, so the lower element's
-      // body is the pair's lower body and its owner counts the pair.
-      if (sh) touching_bodies.insert(pair_key(p_.order[e_body_[a]], p_.order[e_body_[b]]));
-    }
-  }
-  c[4] = sh ? static_cast<long>(touching_bodies.size()) : c[1];
-  for (std::size_t i = 0; i < owned_elements; ++i)
-    for (const auto& w : walls_.primitives()) {
-      Vec3 n;
-      const double overlap = w.overlap(ex(i), er(i), n);
-      if (overlap > 0) {
-        ++c[2];
-        note_overlap(overlap, er(i), eid(i));
-      }
-    }
-  MPI_Comm comm = decomp_.comm();
-  // Free spheres are held on every rank: added once, after the sums.
-  ExactSum::all_reduce(energy, comm);
-  for (const FreeSphere& fs : free_) {
-    energy[0] += 0.5 * fs.mass * norm2(fs.v);
-    energy[1] += 0.5 * fs.inertia * norm2(fs.omega);
-  }
-  e[0] = energy[0].value(), e[1] = energy[1].value();
-  MPI_Allreduce(MPI_IN_PLACE, &e[2], 1, MPI_DOUBLE, MPI_MAX, comm);
-  MPI_Allreduce(MPI_IN_PLACE, c, 6, MPI_LONG, MPI_SUM, comm);
-  if (!std::isfinite(worst.ratio)) worst.ratio = 1e300;
-  MPI_Allreduce(MPI_IN_PLACE, &worst, 1, MPI_DOUBLE_INT, MPI_MAXLOC, comm);
-  for (const FreeSphere& fs : free_) {
-    if (!std::isfinite(norm2(fs.x) + norm2(fs.v) + norm2(fs.omega))) ++c[3];
-    e[2] = std::max(e[2], norm(fs.v));
-  }
-  DemStats s;
-  s.bodies = c[0];
-  s.contacts = c[1];
-  s.body_contacts = c[4];
-  s.wall_contacts = c[2];
-  s.cross_rank_contacts = c[5];
-  s.finite = c[3] == 0;
-  s.kinetic_translational = e[0];
-  s.kinetic_rotational = e[1];
-  s.max_speed = e[2];
-  s.max_overlap_ratio = worst.ratio;
-  s.max_overlap_body = worst.body;
-  return s;
 }
 
 }  // namespace tessera

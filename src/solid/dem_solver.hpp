@@ -123,6 +123,10 @@ class DemSolver {
   void step(bool defer_kick = false);
   // Applies a deferred half-kick and folds the plane-mode turns into q (both idempotent).
   void complete_step();
+  // Applies a deferred half-kick only (idempotent): full-step velocities for statistics read at a
+  // wall-clock moment (progress lines). The plane-mode fold of q is left to deterministic moments
+  // (rebuilds, output, checks), because when it happens changes q's last bits.
+  void complete_kick() { apply_pending_kick(); }
 
   // Time step, chosen at set-up (T6) or set by a caller (the coupled flow's sub-cycling). Applies
   // a pending half-kick first (it belongs to the old step).
@@ -183,8 +187,6 @@ class DemSolver {
   void integrate_second_impl();
   void apply_pending_kick();
   bool external_loads_ = false;
-  void sort_owned_by_order();
-  void assign_order();
   // Shaped mode: element arrays of every local body (after ghosts), and their positions/mirrors.
   void build_elements();
   void update_elements(std::size_t first_body, std::size_t end_body);
