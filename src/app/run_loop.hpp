@@ -44,7 +44,6 @@ class Schedule {
   Schedule(double interval, double time_now) : interval_(interval) {
     if (interval_ > 0) k_ = static_cast<long>(std::floor(time_now / interval_ + 1e-9)) + 1;
   }
-  bool enabled() const { return interval_ > 0; }
   double next() const { return interval_ > 0 ? static_cast<double>(k_) * interval_ : 1e300; }
   // True (and moves on to the next event time) when `time` is within dt/2 of the event time or past it.
   bool due(double time, double dt) {
