@@ -77,6 +77,15 @@ void FlowSolver::initialize(const std::function<CellState(int, int, int)>& cell)
   std::fill(p_.begin(), p_.end(), 0.0);
 }
 
+void FlowSolver::velocity_changed() {
+  grid_->exchange({&u_[0], &u_[1], &u_[2]});
+  fill_velocity_ghosts(u_);
+}
+
+void FlowSolver::keep_stress_divergence(bool on) {
+  for (auto& s : stress_div_) s = on ? grid_->make_field() : std::vector<double>{};
+}
+
 void FlowSolver::refresh() {
   grid_->exchange({&f_, &u_[0], &u_[1], &u_[2], &p_, &uf_[0], &uf_[1], &uf_[2]});
   fill_fraction_ghosts(f_);
@@ -387,6 +396,7 @@ void FlowSolver::viscous(double dt) {
           }
         }
     }
+    if (!stress_div_[q].empty()) std::copy(work_[q].begin(), work_[q].end(), stress_div_[q].begin());
     const double* uq = u_[q].data();
     const double* rho = rho_.data();
     for (int k = g.begin(2); k < g.end(2); ++k)
@@ -537,6 +547,31 @@ PoissonStats FlowSolver::project(double dt, bool with_gravity) {
   g.exchange({&u_[0], &u_[1], &u_[2]});
   fill_velocity_ghosts(u_);
   return ps;
+}
+
+Vec3 FlowSolver::pressure_force(int i, int j, int k) const {
+  const FluidGrid& g = *grid_;
+  const std::size_t c = g.at(i, j, k);
+  const int idx[3] = {i, j, k};
+  Vec3 out;
+  for (int d = 0; d < 3; ++d) {
+    const std::ptrdiff_t st = g.stride(d);
+    const int n = g.cells()[d];
+    const double gd = settings_.gravity[d];
+    // The face on side s (0 low, 1 high) of the cell: its density as in project().
+    auto face = [&](int side) {
+      const std::size_t f = side == 0 ? c : c + st;  // faces are stored on their high cell
+      const int fidx = idx[d] + side;
+      double rho_f;
+      if (!g.periodic(d) && (fidx == 0 || fidx == n))
+        rho_f = rho_[c];
+      else
+        rho_f = 0.5 * (rho_[f] + rho_[f - st]);
+      return rho_f * (face_accel_[d][f] - gd);
+    };
+    out[d] = 0.5 * (face(0) + face(1));
+  }
+  return out;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -124,12 +124,22 @@ class FlowSolver {
   // The last projection's face accelerations a_f = g_f - grad_f p / rho_f along d (F10), on the
   // low face of each cell (the coupling's pressure force on bodies reads them).
   const std::vector<double>& face_acceleration(int d) const { return face_accel_[d]; }
+  // -grad p in owned cell (i, j, k) (N/m^3), as the last projection applied it: per direction the
+  // mean over the cell's two faces of rho_f (a_f - g) (a wall face: -rho g, its normal
+  // acceleration being zero). At hydrostatic rest it is -rho g exactly (theory C3).
+  Vec3 pressure_force(int i, int j, int k) const;
   std::vector<double>& mutable_fraction() { return f_; }
   std::vector<double>& mutable_velocity(int d) { return u_[d]; }
   std::vector<double>& mutable_pressure() { return p_; }
   std::vector<double>& mutable_face_velocity(int d) { return uf_[d]; }
   // After fields were set from outside (restart): fill ghosts and derived fields.
   void refresh();
+  // After owned cell velocities were changed from outside (the coupling's correction): ghosts.
+  void velocity_changed();
+  // On: the viscous stage keeps div(tau) per owned cell (N/m^3; the coupling's viscous force on
+  // bodies reads it). Off (the default): not stored.
+  void keep_stress_divergence(bool on);
+  const std::vector<double>& stress_divergence(int q) const { return stress_div_[q]; }
 
   // Phase timers, with `halo_exchange_fields` and `halo_exchange_multigrid`: the ghost exchanges'
   // share (waiting for the neighbour included), already counted inside the phases that make them.
@@ -159,6 +169,7 @@ class FlowSolver {
   std::vector<double> f_, p_, rho_, mu_, indicator_, dilatation_;
   std::array<std::vector<double>, 3> u_, uf_, face_accel_;
   std::array<std::vector<double>, 3> work_;  // the viscous stage's new velocities (swapped into u_)
+  std::array<std::vector<double>, 3> stress_div_;  // div(tau) of the last viscous stage, when kept
   std::array<std::vector<double>, 4> plic_;  // nx, ny, nz, alpha of interface cells
   std::vector<double> flux_f_, flux_m_, rhs_;
   std::array<std::vector<double>, 3> flux_q_;

@@ -65,6 +65,12 @@ class FluidGrid {
     return (std::size_t(k - gs_[2]) * gm_[1] + std::size_t(j - gs_[1])) * gm_[0] + std::size_t(i - gs_[0]);
   }
   std::ptrdiff_t stride(int d) const { return stride_[d]; }
+  // Global indices (i, j, k) of local array index c (the inverse of at()).
+  std::array<int, 3> index(std::size_t c) const {
+    const int i = int(c % std::size_t(gm_[0])), j = int((c / std::size_t(gm_[0])) % std::size_t(gm_[1]));
+    const int k = int(c / (std::size_t(gm_[0]) * std::size_t(gm_[1])));
+    return {i + gs_[0], j + gs_[1], k + gs_[2]};
+  }
   Vec3 centre(int i, int j, int k) const {
     return {lo_.x + (i + 0.5) * h_[0], lo_.y + (j + 0.5) * h_[1], lo_.z + (k + 0.5) * h_[2]};
   }

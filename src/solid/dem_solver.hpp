@@ -165,6 +165,12 @@ class DemSolver {
   void sum_mesh_loads();
   std::size_t halo_bytes_sent() const { return halo_.bytes_sent(); }  // this rank, whole run
   std::size_t migrations() const { return halo_.migrations(); }       // bodies this rank sent away
+  // Ghosts: a body is copied to a neighbour when its centre is within radius + max_radius() + skin()
+  // of the face (halo.hpp).
+  double max_radius() const { return r_max_; }
+  // Collective: `values` holds `width` doubles per local body (owned, then ghosts); each ghost's are
+  // added to its owner's (reverse communication, Halo::reverse_add). Valid between two steps.
+  void reverse_add_ghosts(std::vector<double>& values, int width) { halo_.reverse_add(values, width); }
 
  private:
   void rebuild();

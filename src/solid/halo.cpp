@@ -151,4 +151,20 @@ void Halo::forward(ParticleStore& p) {
   }
 }
 
+void Halo::reverse_add(std::vector<double>& values, int width) {
+  MPI_Comm comm = decomp_.comm();
+  const std::size_t w = static_cast<std::size_t>(width);
+  for (auto s = swaps_.rbegin(); s != swaps_.rend(); ++s) {
+    out_.assign(values.begin() + static_cast<std::ptrdiff_t>(s->recv_first * w),
+                values.begin() + static_cast<std::ptrdiff_t>((s->recv_first + s->recv_count) * w));
+    in_.resize(s->send.size() * w);
+    MPI_Sendrecv(out_.data(), static_cast<int>(out_.size()), MPI_DOUBLE, s->recv_rank, 14, in_.data(),
+                 static_cast<int>(in_.size()), MPI_DOUBLE, s->send_rank, 14, comm, MPI_STATUS_IGNORE);
+    if (s->recv_rank != MPI_PROC_NULL) bytes_sent_ += out_.size() * sizeof(double);
+    if (s->send_rank == MPI_PROC_NULL) continue;
+    for (std::size_t k = 0; k < s->send.size(); ++k)
+      for (std::size_t c = 0; c < w; ++c) values[static_cast<std::size_t>(s->send[k]) * w + c] += in_[k * w + c];
+  }
+}
+
 }  // namespace tessera

@@ -38,6 +38,11 @@ class Halo {
   void build_ghosts(ParticleStore& p, double reach_extra);
   // Refreshes ghost x, v, omega from their owners.
   void forward(ParticleStore& p);
+  // Reverse communication: `values` holds `width` doubles per local body (owned, then ghosts);
+  // each ghost's values are sent back along the swaps that brought it, in reverse order, and added
+  // to its owner's (a corner ghost passes through the rank that forwarded it). Owned values end
+  // up as their own plus every ghost copy's, in an order fixed by the decomposition.
+  void reverse_add(std::vector<double>& values, int width);
 
   std::size_t bytes_sent() const { return bytes_sent_; }
   std::size_t migrations() const { return migrations_; }  // bodies sent to another rank, whole run

@@ -1,0 +1,63 @@
+// SPDX-License-Identifier: MIT
+#include "coupling/coupled_step.hpp"
+
+#include <cmath>
+
+#include "core/errors.hpp"
+
+namespace tessera {
+
+CouplingSettings CouplingSettings::from_config(const ConfigNode& c) {
+  CouplingSettings s;
+  // Unknown keys are reported by Config::check_unused.
+  if (c.has("substeps")) s.substeps = static_cast<int>(c.integer("substeps", 1, 1'000'000));
+  s.fluid_force = c.flag("fluid_force", true);
+  return s;
+}
+
+CoupledSolver::CoupledSolver(FlowSolver& flow, DemSolver& dem, CouplingSettings settings)
+    : flow_(flow), dem_(dem), settings_(settings), solid_(flow.grid(), dem), dem_stable_dt_(dem.dt()) {
+  dem_.use_external_loads(settings_.fluid_force);
+  flow_.keep_stress_divergence(settings_.fluid_force);
+}
+
+void CoupledSolver::start() {
+  solid_.update(dem_);
+  solid_.correct_velocity(flow_);
+}
+
+int CoupledSolver::substeps_for(double dt) const {
+  if (settings_.substeps) return *settings_.substeps;
+  // The least L with dt / L <= the DEM's stable step (C5); a relative 1e-12 slack so that a flow
+  // step of exactly L DEM steps is not rounded up to L + 1.
+  return std::max(1, static_cast<int>(std::ceil(dt / dem_stable_dt_ * (1 - 1e-12))));
+}
+
+CoupledStepStats CoupledSolver::step(double dt) {
+  CoupledStepStats st;
+  {
+    auto t = timers_.scope("flow");
+    st.flow = flow_.advance(dt);
+  }
+  if (settings_.fluid_force) {
+    auto t = timers_.scope("fluid_force");
+    solid_.fluid_loads(flow_, dem_);
+  }
+  st.substeps = substeps_for(dt);
+  st.dem_dt = dt / st.substeps;
+  {
+    auto t = timers_.scope("dem_substeps");
+    dem_.advance(st.dem_dt, st.substeps);
+  }
+  {
+    auto t = timers_.scope("solid_fraction");
+    solid_.update(dem_);
+  }
+  {
+    auto t = timers_.scope("correction");
+    solid_.correct_velocity(flow_);
+  }
+  return st;
+}
+
+}  // namespace tessera

@@ -1,0 +1,63 @@
+// SPDX-License-Identifier: MIT
+// One coupled flow-DEM step (MICS, drop-impact seed Fig. 1; theory C1-C6), as named stages with one
+// timer each:
+//
+//   flow            the air/water flow over dt, the bodies' cells holding the corrected velocity
+//                   of the last step (FlowSolver::advance)
+//   fluid_force     force and moment of the flow on each body from the cells its tetrahedra cover,
+//                   ghost shares sent back to the owner (SolidPhase::fluid_loads, C3)
+//   dem_substeps    L DEM steps of dt / L with that load held (DemSolver::advance, C5)
+//   solid_fraction  the moved tetrahedra laid over the cells again (SolidPhase::update, C1-C2)
+//   correction      cell velocities become the mass average of fluid and bodies (C4)
+//
+// The flow's pressure equation runs over the whole grid with the fluid's density in every cell:
+// inside a body the fluid is a virtual one that moves with it (docs/design.md, "Coupled step", says
+// why not the mixture density).
+#pragma once
+#include <optional>
+
+#include "core/config.hpp"
+#include "coupling/solid_phase.hpp"
+
+namespace tessera {
+
+struct CouplingSettings {
+  std::optional<int> substeps;  // L; none: the least L with dt / L <= the DEM's own stable step
+  bool fluid_force = true;      // off: the bodies move the flow, the flow does not push them
+  static CouplingSettings from_config(const ConfigNode& coupling);
+};
+
+struct CoupledStepStats {
+  FlowStepStats flow;
+  int substeps = 0;
+  double dem_dt = 0;
+};
+
+class CoupledSolver {
+ public:
+  // Both solvers set up (DemSolver::setup, FlowSolver::initialize); keeps references.
+  CoupledSolver(FlowSolver& flow, DemSolver& dem, CouplingSettings settings);
+
+  // The solid phase of the current bodies and the corrected cell velocities (after set-up and
+  // after a restart).
+  void start();
+  CoupledStepStats step(double dt);
+  // L for a flow step dt.
+  int substeps_for(double dt) const;
+  double dem_stable_dt() const { return dem_stable_dt_; }
+
+  const SolidPhase& solid() const { return solid_; }
+  FlowSolver& flow() { return flow_; }
+  DemSolver& dem() { return dem_; }
+  PhaseTimers& timers() { return timers_; }
+
+ private:
+  FlowSolver& flow_;
+  DemSolver& dem_;
+  CouplingSettings settings_;
+  SolidPhase solid_;
+  double dem_stable_dt_ = 0;
+  PhaseTimers timers_;
+};
+
+}  // namespace tessera

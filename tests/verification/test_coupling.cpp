@@ -1,0 +1,295 @@
+// SPDX-License-Identifier: MIT
+// The flow-DEM coupling (src/coupling, theory C1-C5) on 1, 2 and 4 ranks, the bodies straddling the
+// sub-domain cuts at the middle of the box:
+//  - solid fraction: the grid holds the bodies' volume to round-off, and each cell has the same bits
+//    as a serial lay-out of every body over the whole grid (no ghost missing, none counted twice);
+//  - buoyancy: a body at rest in still water feels rho_w g V (Archimedes) up to the Poisson
+//    tolerance; across the free surface g (rho_w V_below + rho_a V_above), within the bound the
+//    interface's smearing over three cells allows (2 h g (rho_w - rho_a) A, A the body's largest
+//    horizontal section), converging with the grid;
+//  - sub-cycling: one coupled step of L DEM sub-steps, fluid force off, is L plain DEM steps bit for
+//    bit, contacts included.
+#include <gtest/gtest.h>
+#include <mpi.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+
+#include "coupling/coupled_step.hpp"
+#include "solid/shape.hpp"
+#include "support/dem_fixture.hpp"
+
+namespace tessera::test {
+namespace {
+
+bool root() {
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  return rank == 0;
+}
+
+constexpr double kBox = 8e-3;
+const Vec3 kSemi{1.0e-3, 0.6e-3, 0.5e-3};
+
+ShapeTemplate grain() {
+  std::vector<Vec3> nodes;
+  std::vector<std::array<int, 4>> tets;
+  ellipsoid_mesh(kSemi, 6, 12, nodes, tets);
+  return ShapeTemplate::from_mesh("grain", nodes, tets, 30, 0.2e-3);
+}
+
+Quaternion turn(int n) {  // a different orientation per body
+  const Vec3 a{std::sin(1.3 * n), std::cos(0.7 * n), 0.5 + std::sin(2.1 * n)};
+  const double angle = 0.9 * n + 0.3, s = std::sin(0.5 * angle) / norm(a);
+  return {std::cos(0.5 * angle), a.x * s, a.y * s, a.z * s};
+}
+
+ContactModel sand_model(double density) {
+  ContactModel model(LawKind::linear_spring_dashpot, {make_material("sand", density)});
+  model.set_pair(0, 0, ContactModel::linear_pair(1e4, 1e4, 0.5, 0.6));
+  return model;
+}
+
+FlowSettings water_and_air(int cells) {
+  FlowSettings st;
+  st.cells = {cells, cells, cells};
+  st.liquid = {1000, 1e-3};
+  st.gas = {1.0, 1.8e-5};
+  st.gravity = {0, 0, -9.81};
+  return st;
+}
+
+// Liquid fraction of cell k for a flat surface at height z0.
+double below(const FluidGrid& g, int k, double z0) {
+  const double lo = g.lo().z + k * g.h(2);
+  return std::clamp((z0 - lo) / g.h(2), 0.0, 1.0);
+}
+
+struct BodyRecord {
+  double order, shape, mass, x[3], q[4];
+};
+
+// Every rank's owned bodies, on every rank, in canonical order.
+std::vector<BodyRecord> all_bodies(const DemSolver& dem) {
+  const ParticleStore& p = dem.particles();
+  std::vector<BodyRecord> mine(p.owned);
+  for (std::size_t i = 0; i < p.owned; ++i) {
+    mine[i] = {double(p.order[i]), double(p.shape[i]), p.mass[i], {}, {}};
+    for (int k = 0; k < 3; ++k) mine[i].x[k] = p.x[3 * i + k];
+    for (int k = 0; k < 4; ++k) mine[i].q[k] = p.q[4 * i + k];
+  }
+  int size = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  const int n = int(mine.size() * sizeof(BodyRecord) / sizeof(double));
+  std::vector<int> counts(size), displs(size);
+  MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
+  int total = 0;
+  for (int r = 0; r < size; ++r) displs[r] = total, total += counts[r];
+  std::vector<BodyRecord> all(std::size_t(total) * sizeof(double) / sizeof(BodyRecord));
+  MPI_Allgatherv(mine.data(), n, MPI_DOUBLE, all.data(), counts.data(), displs.data(), MPI_DOUBLE, MPI_COMM_WORLD);
+  std::sort(all.begin(), all.end(), [](const BodyRecord& a, const BodyRecord& b) { return a.order < b.order; });
+  return all;
+}
+
+TEST(SolidFraction, HoldsTheBodiesExactlyWithTheSameBitsOnAnyRankCount) {
+  DemSettings s;
+  s.gravity = {0, 0, -9.81};
+  s.time_step = 1e-6;
+  DemRig rig(MPI_COMM_WORLD, {0, 0, 0}, {kBox, kBox, kBox}, sand_model(2650), Walls{}, s);
+  rig.dem->set_shapes({grain()});
+  // 27 grains on a 2.5 mm lattice around the box centre, turned: the middle layer sits on the cuts.
+  int id = 0, straddling = 0;
+  for (int i = -1; i <= 1; ++i)
+    for (int j = -1; j <= 1; ++j)
+      for (int k = -1; k <= 1; ++k, ++id) {
+        const Vec3 x{4e-3 + 2.5e-3 * i + 1e-4 * k, 4e-3 + 2.5e-3 * j - 0.7e-4 * i, 4e-3 + 2.5e-3 * k + 0.5e-4 * j};
+        straddling += std::abs(x.x - 4e-3) < 1e-3 || std::abs(x.y - 4e-3) < 1e-3 || std::abs(x.z - 4e-3) < 1e-3;
+        rig.dem->add_body(id, 0, 1, x, turn(id), {});
+      }
+  rig.dem->setup();
+  ASSERT_GE(straddling, 19);
+  FlowSolver flow(*rig.decomp, water_and_air(20));  // h = 0.4 mm: not aligned with the lattice
+  flow.initialize([](int, int, int) { return FlowSolver::CellState{1.0, {}}; });
+  SolidPhase solid(flow.grid(), *rig.dem);
+  solid.update(*rig.dem);
+  const SolidPhaseStats st = solid.stats();
+  const double v_body = rig.dem->shapes()[0].volume;
+  EXPECT_NEAR(st.body_volume, 27 * v_body, 1e-15 * 27 * v_body);
+  EXPECT_NEAR(st.solid_volume, st.body_volume, 1e-13 * st.body_volume);
+  EXPECT_LE(st.max_fraction, 1.0 + 1e-12);
+  EXPECT_GT(st.max_fraction, 0.99);  // some cell lies inside a grain
+  // The serial lay-out: every body over the whole grid, in canonical order, kept on owned cells.
+  const FluidGrid& g = flow.grid();
+  std::vector<double> ref = g.make_field();
+  const CellRange cells{g.lo(), {g.h(0), g.h(1), g.h(2)}, {0, 0, 0}, g.cells()};
+  TetRasterizer raster;
+  const ShapeTemplate& t = rig.dem->shapes()[0];
+  for (const BodyRecord& b : all_bodies(*rig.dem)) {
+    const Quaternion q{b.q[0], b.q[1], b.q[2], b.q[3]};
+    const Vec3 xb{b.x[0], b.x[1], b.x[2]};
+    std::vector<std::pair<std::size_t, double>> pieces;
+    for (const auto& tet : t.tetrahedra) {
+      Tet w;
+      for (int v = 0; v < 4; ++v) w[v] = xb + q.rotate(t.nodes[tet[v]]);
+      raster.overlaps(w, cells, [&](int i, int j, int k, double v) {
+        if (i >= g.begin(0) && i < g.end(0) && j >= g.begin(1) && j < g.end(1) && k >= g.begin(2) && k < g.end(2))
+          pieces.emplace_back(g.at(i, j, k), v);
+      });
+    }
+    std::stable_sort(pieces.begin(), pieces.end(), [](const auto& a, const auto& c) { return a.first < c.first; });
+    for (std::size_t e = 0; e < pieces.size();) {
+      double vol = 0;
+      const std::size_t c = pieces[e].first;
+      for (; e < pieces.size() && pieces[e].first == c; ++e) vol += pieces[e].second;
+      ref[c] += vol / g.cell_volume();
+    }
+  }
+  long differ = 0;
+  for (int k = g.begin(2); k < g.end(2); ++k)
+    for (int j = g.begin(1); j < g.end(1); ++j)
+      for (int i = g.begin(0); i < g.end(0); ++i) differ += solid.fraction()[g.at(i, j, k)] != ref[g.at(i, j, k)];
+  MPI_Allreduce(MPI_IN_PLACE, &differ, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
+  EXPECT_EQ(differ, 0) << "cells whose solid fraction differs from the serial lay-out";
+}
+
+// A grain at (4, 4, zc) mm in a box of water up to z0 at rest; returns the fluid force and moment
+// on it after three flow steps (on every rank), and its volume below z0.
+struct Buoyancy {
+  Vec3 force, moment;
+  double v_below = 0, v_total = 0, section = 0;
+};
+
+Buoyancy resting_grain(int cells, double zc, double z0) {
+  DemSettings s;
+  s.gravity = {0, 0, -9.81};
+  s.time_step = 1e-6;
+  DemRig rig(MPI_COMM_WORLD, {0, 0, 0}, {kBox, kBox, kBox}, sand_model(2650), Walls{}, s);
+  rig.dem->set_shapes({grain()});
+  const Vec3 xc{4e-3 + 1e-5, 4e-3 - 2e-5, zc};
+  rig.dem->add_body(0, 0, 1, xc, turn(3), {});
+  rig.dem->setup();
+  FlowSolver flow(*rig.decomp, water_and_air(cells));
+  const FluidGrid& g = flow.grid();
+  flow.initialize([&](int, int, int k) { return FlowSolver::CellState{below(g, k, z0), {}}; });
+  for (int n = 0; n < 3; ++n) flow.advance(1e-5);
+  SolidPhase solid(g, *rig.dem);
+  solid.update(*rig.dem);
+  solid.fluid_loads(flow, *rig.dem);
+  Buoyancy out;
+  const auto& p = rig.dem->particles();
+  double fm[6] = {0, 0, 0, 0, 0, 0};
+  if (p.owned == 1)
+    for (int k = 0; k < 3; ++k) fm[k] = p.f_ext[k], fm[3 + k] = p.t_ext[k];
+  MPI_Allreduce(MPI_IN_PLACE, fm, 6, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+  out.force = {fm[0], fm[1], fm[2]};
+  out.moment = {fm[3], fm[4], fm[5]};
+  // The exact reference: the grain's tetrahedra clipped at z0.
+  const ShapeTemplate& t = rig.dem->shapes()[0];
+  const Quaternion q = turn(3);
+  const double qn = std::sqrt(q.norm2());
+  const Quaternion qu{q.w / qn, q.x / qn, q.y / qn, q.z / qn};
+  for (const auto& tet : t.tetrahedra) {
+    Tet w;
+    for (int v = 0; v < 4; ++v) w[v] = xc + qu.rotate(t.nodes[tet[v]]);
+    std::vector<Tet> part;
+    clip_tets({w}, 2, z0, true, part);
+    for (const Tet& piece : part) out.v_below += tet_volume(piece);
+    out.v_total += tet_volume(w);
+  }
+  out.section = std::numbers::pi * kSemi.x * kSemi.y;  // the ellipsoid's largest section: a bound
+  return out;
+}
+
+TEST(FluidForce, SubmergedBodyAtRestFeelsArchimedesBuoyancy) {
+  const Buoyancy b = resting_grain(16, 3.7e-3, 6.3e-3);
+  const double archimedes = 1000 * 9.81 * b.v_total;
+  if (root()) std::printf("  submerged: F = (%.3e, %.3e, %.6e) N, rho g V = %.6e N\n", b.force.x, b.force.y, b.force.z,
+              archimedes);
+  EXPECT_NEAR(b.force.z, archimedes, 1e-6 * archimedes);
+  EXPECT_NEAR(b.force.x, 0, 1e-6 * archimedes);
+  EXPECT_NEAR(b.force.y, 0, 1e-6 * archimedes);
+  // The centre of buoyancy is the centroid: no moment, to the cell-centre lever arms' resolution
+  // (the force density is uniform, so sum V_bc (x_c - x_b) is the volume's first moment about x_b
+  // with each piece put at its cell centre: at most V h / 2).
+  EXPECT_LE(norm(b.moment), archimedes * 0.5 * kBox / 16);
+}
+
+TEST(FluidForce, BodyAcrossTheFreeSurfaceConvergesToArchimedes) {
+  const double z0 = 4.3e-3, drho = 1000 - 1.0;
+  double last = 1e300;
+  for (int cells : {8, 16, 32}) {
+    const Buoyancy b = resting_grain(cells, 4.1e-3, z0);
+    const double exact = 9.81 * (1000 * b.v_below + 1.0 * (b.v_total - b.v_below));
+    const double h = kBox / cells, bound = 2 * h * 9.81 * drho * b.section;
+    const double err = std::abs(b.force.z - exact);
+    if (root() && last < 1e300) std::printf("  observed order %.2f\n", std::log2(last / err));
+    if (root()) std::printf("  h = %.3g mm: F_z = %.6e N, exact %.6e N, error %.3e N (%.2f %% of the bound)\n", h * 1e3, b.force.z,
+                exact, err, 100 * err / bound);
+    EXPECT_LE(err, bound);
+    EXPECT_LT(err, last);
+    last = err;
+  }
+}
+
+TEST(SubCycling, OneFlowStepOfLSubstepsIsLPlainDemStepsBitForBit) {
+  // Grains dropped on a floor (contacts with the floor and each other, across the cuts). Fluid force
+  // off: the coupled step's DEM stage must be the plain DEM's steps.
+  const double dt_dem = std::ldexp(1.0, -20);  // ~0.95 us; dt / L is then exact
+  const int L = 16;
+  const double dt = dt_dem * L;
+  auto build = [&](DemRig& rig) {
+    rig.dem->set_shapes({grain()});
+    int id = 0;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        for (int k = 0; k < 2; ++k, ++id)
+          rig.dem->add_body(id, 0, 1, {1.6e-3 + 2.4e-3 * i, 1.6e-3 + 2.4e-3 * j, 1.2e-3 + 1.3e-3 * k}, turn(id),
+                            {0.05 * std::sin(id), 0.05 * std::cos(id), -0.8});
+    rig.dem->setup();
+  };
+  DemSettings s;
+  s.gravity = {0, 0, -9.81};
+  s.time_step = dt_dem;
+  Walls walls;
+  walls.add_box_inside({0, 0, 0}, {kBox, kBox, kBox}, 0);
+  DemRig coupled(MPI_COMM_WORLD, {0, 0, 0}, {kBox, kBox, kBox}, sand_model(2650), walls, s);
+  DemRig plain(MPI_COMM_WORLD, {0, 0, 0}, {kBox, kBox, kBox}, sand_model(2650), walls, s);
+  build(coupled);
+  build(plain);
+  FlowSolver flow(*coupled.decomp, water_and_air(16));
+  flow.initialize([&](int, int, int k) { return FlowSolver::CellState{below(flow.grid(), k, 3e-3), {}}; });
+  CouplingSettings cs;
+  cs.fluid_force = false;
+  CoupledSolver cpl(flow, *coupled.dem, cs);
+  cpl.start();
+  ASSERT_EQ(cpl.substeps_for(dt), L);
+  long contacts = 0;
+  for (int n = 0; n < 200; ++n) {
+    const CoupledStepStats st = cpl.step(dt);
+    ASSERT_EQ(st.substeps, L);
+    for (int k = 0; k < L; ++k) plain.dem->step();
+    plain.dem->complete_step();
+    const DemStats ds = plain.dem->stats();
+    contacts += ds.contacts + ds.wall_contacts;
+  }
+  const auto& a = coupled.dem->particles();
+  const auto& b = plain.dem->particles();
+  ASSERT_EQ(a.owned, b.owned);
+  long differ = 0;
+  for (std::size_t i = 0; i < a.owned; ++i) {
+    ASSERT_EQ(a.id[i], b.id[i]);
+    for (int k = 0; k < 3; ++k)
+      differ += a.x[3 * i + k] != b.x[3 * i + k] || a.v[3 * i + k] != b.v[3 * i + k] ||
+                a.omega[3 * i + k] != b.omega[3 * i + k];
+    for (int k = 0; k < 4; ++k) differ += a.q[4 * i + k] != b.q[4 * i + k];
+  }
+  MPI_Allreduce(MPI_IN_PLACE, &differ, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
+  EXPECT_EQ(differ, 0);
+  if (root()) std::printf("  contacts sampled: %ld\n", contacts);
+  EXPECT_GT(contacts, 100) << "the grains must touch the floor and each other";
+}
+
+}  // namespace
+}  // namespace tessera::test
