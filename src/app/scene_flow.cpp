@@ -1,6 +1,13 @@
 // SPDX-License-Identifier: MIT
-// The flow scene: air and water in a box, no bodies (issue 4). Dam breaks, drops into pools and
-// onto floors. Case sections: domain, fluid, initial, monitors, run, output (README, section Flow).
+// The flow scene: air and water in a box (issue 4). Dam breaks, drops into pools and onto floors.
+// Case sections: domain, fluid, initial, monitors, run, output (README, section Flow).
+//
+// `scene: coupled` is the same scene with bodies in the flow (issue 15, src/coupling): sections
+// solid (as a dry scene's), bodies (file: a Tessera checkpoint, e.g. a settled bed; or list: bodies
+// one by one) and coupling (substeps, fluid_force); each step is CoupledSolver::step. It also
+// writes DIR/snapshots (bodies, grain surfaces), the solid fraction with the fields, DIR/scene.xmf
+// (fields and bodies in one time series, ParaView) and DIR/checkpoint_bodies.h5 beside
+// DIR/checkpoint.h5.
 //
 // Writes DIR/summary.json (quantities, timers, Poisson statistics, dt limits), DIR/series.csv
 // (one row per series_interval: time, dt and its limit, Poisson iterations and residual, liquid
@@ -12,6 +19,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <numbers>
 #include <sstream>
 
 #include "app/run_loop.hpp"
@@ -21,8 +29,10 @@
 
 #if defined(TESSERA_HAVE_PETSC)
 #include "app/signals.hpp"
+#include "coupling/coupled_step.hpp"
 #include "fluid/flow_solver.hpp"
 #include "fluid/fluid_io.hpp"
+#include "solid/dem_io.hpp"
 #include "tessera_version.hpp"
 #endif
 
@@ -30,7 +40,7 @@ namespace tessera {
 
 #if !defined(TESSERA_HAVE_PETSC)
 
-std::unique_ptr<Scene> make_flow_scene(const ConfigNode& root, MPI_Comm, const std::string&) {
+std::unique_ptr<Scene> make_flow_scene(const ConfigNode& root, MPI_Comm, const std::string&, bool) {
   root.fail("scene", "a dry scene: this build has no fluid module (PETSc was not found at configure time)");
 }
 
@@ -95,13 +105,27 @@ std::vector<LiquidShape> read_liquid_shapes(const ConfigNode& initial) {
   return shapes;
 }
 
+// A body of the coupled scene's `bodies.list`.
+struct BodySpec {
+  int shape = 1, material = 0;
+  Vec3 x, v, omega;
+  Quaternion q;
+  double density = 0;
+};
+
+// The bodies' checkpoint beside the flow's: DIR/checkpoint.h5 -> DIR/checkpoint_bodies.h5.
+std::string bodies_path(const std::string& flow_checkpoint) {
+  const fs::path p(flow_checkpoint);
+  return (p.parent_path() / (p.stem().string() + "_bodies" + p.extension().string())).string();
+}
+
 class FlowScene final : public SteppedScene {
  public:
-  FlowScene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir) {
-    (void)case_dir;
+  FlowScene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir, bool coupled) {
     const DomainSpec domain = read_domain(root);
     decomp_ = std::make_unique<Decomposition>(comm, domain.lo, domain.hi, domain.grid);
     flow_ = std::make_unique<FlowSolver>(*decomp_, FlowSettings::from_config(root.section("fluid")));
+    if (coupled) read_bodies(root, case_dir);
 
     if (const auto init = root.optional_section("initial")) {
       shapes_ = read_liquid_shapes(*init);
@@ -128,9 +152,13 @@ class FlowScene final : public SteppedScene {
     }
   }
 
-  const char* name() const override { return "flow"; }
+  const char* name() const override { return dem_ ? "coupled" : "flow"; }
 
  private:
+  void read_bodies(const ConfigNode& root, const std::string& case_dir);
+  void create_bodies();
+  void check_bodies(const RunOptions& opt);
+  void write_scene_index(const RunOptions& opt);
   void set_initial_state();
   double front_position() const;
   [[noreturn]] void fail(const RunOptions& opt, const std::string& why);
@@ -144,12 +172,15 @@ class FlowScene final : public SteppedScene {
   double last_dt() const override { return flow_->last_dt(); }
   void step(const RunOptions& opt) override;
   bool after_step(const RunOptions& opt) override;
-  void write_snapshot() override { fields_->write(*flow_); }
-  void write_checkpoint(const std::string& path) override { write_flow_checkpoint(path, *flow_); }
+  void write_snapshot() override;
+  void write_checkpoint(const std::string& path) override {
+    write_flow_checkpoint(path, *flow_);
+    if (dem_) tessera::write_checkpoint(bodies_path(path), *dem_);
+  }
   std::string progress() override;
   void end_output(const RunOptions& opt) override;
   void summarise(nlohmann::json& s) override;
-  PhaseTimers& phase_timers() override { return flow_->timers(); }
+  PhaseTimers& phase_timers() override { return coupled_ ? coupled_->timers() : flow_->timers(); }
 
   std::unique_ptr<Decomposition> decomp_;
   std::unique_ptr<FlowSolver> flow_;
@@ -166,7 +197,97 @@ class FlowScene final : public SteppedScene {
   double volume0_ = 0, peak_speed_ = 0, next_series_ = 0;
   long poisson_iterations_ = 0, max_iterations_ = 0;
   std::map<std::string, long> limits_;
+  // Coupled scene (null in the flow scene).
+  std::unique_ptr<DemSolver> dem_;
+  std::unique_ptr<CoupledSolver> coupled_;
+  CouplingSettings coupling_;
+  std::string bodies_file_;
+  std::vector<BodySpec> body_list_;
+  double check_interval_ = 0, max_overlap_ratio_ = 0.5;
+  Schedule checks_;
+  std::unique_ptr<SnapshotSeries> bodies_out_;
+  std::string output_dir_;
+  int last_substeps_ = 0;
+  long substeps_total_ = 0;
 };
+
+void FlowScene::read_bodies(const ConfigNode& root, const std::string& case_dir) {
+  const ConfigNode solid = root.section("solid");
+  ContactModel model(solid);
+  Walls walls(solid, model, case_dir);
+  const DemSettings ds = DemSettings::from_config(solid);
+  const Vec3 gf = flow_->settings().gravity;
+  if (norm(ds.gravity - gf) > 1e-12 * (norm(gf) + 1))
+    solid.fail("gravity", "the fluid's gravity (the same field acts on fluid and bodies)");
+  dem_ = std::make_unique<DemSolver>(*decomp_, std::move(model), std::move(walls), ds);
+  dem_->set_shapes(read_shapes(solid, case_dir));
+  if (dem_->shapes().empty())
+    solid.fail("shapes", "at least one shape template: coupled bodies are made of tetrahedra");
+  if (const auto c = root.optional_section("coupling")) coupling_ = CouplingSettings::from_config(*c);
+  const ConfigNode b = root.section("bodies");
+  if (b.has("file") == b.has("list")) b.fail("file", "exactly one of file (a Tessera checkpoint) and list");
+  if (b.has("file")) {
+    const fs::path path(b.text("file"));
+    bodies_file_ = path.is_absolute() ? path.string() : (fs::path(case_dir) / path).lexically_normal().string();
+    if (!fs::is_regular_file(bodies_file_) || fs::path(bodies_file_).extension() != ".h5")
+      b.fail("file", "an existing Tessera checkpoint (.h5): " + bodies_file_);
+  } else {
+    std::vector<int> mats;
+    for (const ConfigNode& e : b.list("list")) {
+      BodySpec s;
+      const std::string shape = e.text("shape");
+      s.shape = 0;
+      for (std::size_t k = 0; k < dem_->shapes().size(); ++k)
+        if (dem_->shapes()[k].name == shape) s.shape = int(k) + 1;
+      if (!s.shape) e.fail("shape", "the name of a template in solid.shapes");
+      s.material = dem_->model().material_index(e.text("material"), e.key_path("material"));
+      mats.push_back(s.material);
+      s.x = e.vec3("position", Dim::length);
+      s.v = e.vec3("velocity", Dim::velocity, Vec3{});
+      s.omega = e.vec3("angular_velocity", Dim::angular_velocity, Vec3{});
+      if (const auto o = e.optional_section("orientation")) {  // a turn about an axis, from the template's frame
+        const Vec3 axis = o->vec3("axis", Dim::none);
+        if (!(norm(axis) > 0)) o->fail("axis", "a non-zero vector");
+        const double half = 0.5 * o->real("angle_degrees", Dim::none, Range::closed(-360, 360)) * std::numbers::pi / 180;
+        const Vec3 u = axis / norm(axis) * std::sin(half);
+        s.q = {std::cos(half), u.x, u.y, u.z};
+      }
+      s.density = e.real("density", Dim::density, Range::positive(), 0.0);
+      body_list_.push_back(s);
+    }
+    if (body_list_.empty()) b.fail("list", "at least one body");
+  }
+  const ConfigNode run = root.section("run");
+  check_interval_ = run.real("check_interval", Dim::time, Range::positive(), 1e-4);
+  max_overlap_ratio_ = run.real("max_overlap_ratio", Dim::none, Range{0.0, 2.0, true, false}, max_overlap_ratio_);
+}
+
+void FlowScene::create_bodies() {
+  if (!bodies_file_.empty()) {
+    read_checkpoint(bodies_file_, *dem_);
+    dem_->set_clock(0.0, 0);
+    dem_->setup(false);
+    return;
+  }
+  std::int64_t id = 0;
+  for (const BodySpec& b : body_list_) dem_->add_body(id++, b.material, b.shape, b.x, b.q, b.v, b.omega, b.density);
+  dem_->setup(true);
+}
+
+// Every run.check_interval: the bodies' state is finite and no overlap exceeds the bound.
+void FlowScene::check_bodies(const RunOptions& opt) {
+  if (!checks_.due(flow_->time(), flow_->last_dt())) return;
+  const DemStats s = dem_->stats();
+  if (s.finite && s.max_overlap_ratio <= max_overlap_ratio_) return;
+  std::ostringstream m;
+  if (!s.finite)
+    m << "non-finite body positions or velocities";
+  else
+    m << "overlap of body " << s.max_overlap_body << " reached " << s.max_overlap_ratio
+      << " of its contact radius (run.max_overlap_ratio = " << max_overlap_ratio_
+      << "): stiffer contacts, or more DEM sub-steps (coupling.substeps)";
+  fail(opt, m.str());
+}
 
 void FlowScene::set_initial_state() {
   const FluidGrid& g = flow_->grid();
@@ -226,7 +347,7 @@ double FlowScene::front_position() const {
 }
 
 void FlowScene::fail(const RunOptions& opt, const std::string& why) {
-  write_flow_checkpoint(opt.output_dir + "/failure.h5", *flow_);
+  write_checkpoint(opt.output_dir + "/failure.h5");
   throw CollectiveRunError("flow: " + why + " at step " + std::to_string(flow_->steps()) +
                            ", t = " + std::to_string(flow_->time()) + " s. Failing state: " + opt.output_dir +
                            "/failure.h5; last good state: " + opt.output_dir + "/checkpoint.h5, if any.");
@@ -234,6 +355,14 @@ void FlowScene::fail(const RunOptions& opt, const std::string& why) {
 
 void FlowScene::start(const RunOptions& opt) {
   if (opt.restart) read_flow_checkpoint(*opt.restart, *flow_);
+  if (!dem_) return;
+  if (opt.restart) {
+    read_checkpoint(bodies_path(*opt.restart), *dem_);
+    dem_->setup(false);
+  } else {
+    create_bodies();
+  }
+  coupled_ = std::make_unique<CoupledSolver>(*flow_, *dem_, coupling_);
 }
 
 void FlowScene::begin_output(const RunOptions& opt) {
@@ -246,13 +375,20 @@ void FlowScene::begin_output(const RunOptions& opt) {
       fail(opt, std::string("initial projection: ") + e.what());
     }
   }
+  if (coupled_) coupled_->start(!opt.restart);  // a restart's velocities were corrected when saved
   volume0_ = flow_->liquid_volume();
   peak_speed_ = flow_->max_speed();
+  output_dir_ = opt.output_dir;
+  const long bodies = dem_ ? dem_->stats().bodies : 0;  // collective
   if (root && !opt.quiet) {
     const auto& d = decomp_->dims();
     std::printf("tessera %s: scene flow, %d x %d x %d cells, %d ranks (grid %dx%dx%d), Poisson %s\n", kTesseraVersion,
                 g.cells()[0], g.cells()[1], g.cells()[2], decomp_->size(), d[0], d[1], d[2],
                 flow_->poisson_description().c_str());
+    if (coupled_)
+      std::printf("  bodies: %ld, DEM stable step %.4g s, sub-steps %s\n", bodies,
+                  coupled_->dem_stable_dt(),
+                  coupling_.substeps ? std::to_string(*coupling_.substeps).c_str() : "from each flow step's dt");
     if (!deprecated_.empty()) std::printf("  warning: %s\n", deprecated_.c_str());
     std::fflush(stdout);
   }
@@ -265,8 +401,39 @@ void FlowScene::begin_output(const RunOptions& opt) {
     series_.precision(10);
   }
   fields_ = std::make_unique<FieldSeries>(opt.output_dir + "/fields");
-  if (snapshot_interval_ > 0) fields_->write(*flow_);
+  if (coupled_) {
+    fields_->add_field("solid_fraction", &coupled_->solid().fraction());
+    bodies_out_ = std::make_unique<SnapshotSeries>(opt.output_dir + "/snapshots");
+    checks_ = Schedule(check_interval_, flow_->time());
+  }
+  if (snapshot_interval_ > 0) write_snapshot();
   next_series_ = flow_->time();
+}
+
+void FlowScene::write_snapshot() {
+  fields_->write(*flow_);
+  if (!bodies_out_) return;
+  bodies_out_->write(*dem_);
+  write_scene_index(RunOptions{output_dir_, "", {}, true});
+}
+
+// DIR/scene.xmf: per snapshot a spatial collection of the fields and the bodies (and the grains'
+// surfaces), at the flow's time.
+void FlowScene::write_scene_index(const RunOptions& opt) {
+  if (flow_->grid().rank() != 0) return;
+  std::ostringstream x;
+  x.precision(17);
+  x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n<Domain>\n"
+    << "<Grid Name=\"scene\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+  const std::size_t n = std::min<std::size_t>(std::size_t(fields_->count()), bodies_out_->count());
+  for (std::size_t k = 0; k < n; ++k) {
+    x << "<Grid Name=\"step\" GridType=\"Collection\" CollectionType=\"Spatial\">\n<Time Value=\""
+      << fields_->time_of(int(k)) << "\"/>\n"
+      << fields_->grid_xml(flow_->grid(), int(k), "fields/") << bodies_out_->grid_xml(k, "snapshots/", false)
+      << bodies_out_->grid_xml(k, "snapshots/", true) << "</Grid>\n";
+  }
+  x << "</Grid>\n</Domain>\n</Xdmf>\n";
+  write_file_atomically(opt.output_dir + "/scene.xmf", x.str());
 }
 
 void FlowScene::step(const RunOptions& opt) {
@@ -284,7 +451,14 @@ void FlowScene::step(const RunOptions& opt) {
     }
   }
   try {
-    last_ = flow_->advance(dt);
+    if (coupled_) {
+      const CoupledStepStats cs = coupled_->step(dt);
+      last_ = cs.flow;
+      last_substeps_ = cs.substeps;
+      substeps_total_ += cs.substeps;
+    } else {
+      last_ = flow_->advance(dt);
+    }
   } catch (const CollectiveRunError& e) {
     fail(opt, e.what());
   }
@@ -295,6 +469,7 @@ void FlowScene::step(const RunOptions& opt) {
 }
 
 bool FlowScene::after_step(const RunOptions& opt) {
+  if (dem_) check_bodies(opt);
   const double end = end_time_.value_or(0.0);
   const bool sample = flow_->time() >= next_series_ - 1e-12 * end;
   if (!sample && flow_->steps() % 20 != 0) return false;
@@ -319,12 +494,17 @@ std::string FlowScene::progress() {
   char line[200];
   std::snprintf(line, sizeof line, "dt %.3g (%s)  Poisson %d its  max|u| %.3g m/s  volume drift %.2e", last_.dt,
                 last_limit_.c_str(), last_.poisson.iterations, vmax, drift);
-  return line;
+  if (!dem_) return line;
+  const DemStats b = dem_->stats();
+  char more[160];
+  std::snprintf(more, sizeof more, "  L %d  bodies KE %.3g J  max|v| %.3g m/s", last_substeps_,
+                b.kinetic_translational + b.kinetic_rotational, b.max_speed);
+  return std::string(line) + more;
 }
 
 void FlowScene::end_output(const RunOptions& opt) {
-  write_flow_checkpoint(opt.output_dir + "/checkpoint.h5", *flow_);
-  if (snapshot_interval_ > 0 && !fields_->written_at(flow_->time())) fields_->write(*flow_);
+  write_checkpoint(opt.output_dir + "/checkpoint.h5");
+  if (snapshot_interval_ > 0 && !fields_->written_at(flow_->time())) write_snapshot();
   if (series_.is_open()) series_.close();
 }
 
@@ -355,12 +535,31 @@ void FlowScene::summarise(nlohmann::json& s) {
   s["output"] = {{"checkpoint", "checkpoint.h5"},
                  {"series", "series.csv"},
                  {"snapshots", fields_->count() ? "fields/fields.xmf" : ""}};
+  if (!coupled_) return;
+  const DemStats b = dem_->stats();
+  const SolidPhaseStats sp = coupled_->solid().stats();
+  s["quantities"]["bodies"] = b.bodies;
+  s["quantities"]["body_kinetic_energy"] = b.kinetic_translational + b.kinetic_rotational;
+  s["quantities"]["body_max_speed"] = b.max_speed;
+  s["quantities"]["solid_volume"] = sp.solid_volume;
+  s["quantities"]["body_volume"] = sp.body_volume;
+  s["quantities"]["solid_volume_error"] = sp.body_volume > 0 ? (sp.solid_volume - sp.body_volume) / sp.body_volume : 0.0;
+  s["quantities"]["max_solid_fraction"] = sp.max_fraction;
+  s["coupling"] = {{"dem_stable_dt", coupled_->dem_stable_dt()},
+                   {"substeps_per_flow_step", steps_run ? double(substeps_total_) / steps_run : 0.0},
+                   {"fluid_force", coupling_.fluid_force}};
+  s["output"]["checkpoint_bodies"] = "checkpoint_bodies.h5";
+  s["output"]["scene"] = fields_->count() ? "scene.xmf" : "";
+  s["output"]["bodies"] = bodies_out_->count() ? "snapshots/particles.xmf" : "";
+  // The solvers' own phases inside the coupled stages.
+  coupled_->timers().merge(flow_->timers(), "flow/");
+  coupled_->timers().merge(dem_->timers(), "dem/");
 }
 
 }  // namespace
 
-std::unique_ptr<Scene> make_flow_scene(const ConfigNode& root, MPI_Comm comm, const std::string& dir) {
-  return std::make_unique<FlowScene>(root, comm, dir);
+std::unique_ptr<Scene> make_flow_scene(const ConfigNode& root, MPI_Comm comm, const std::string& dir, bool coupled) {
+  return std::make_unique<FlowScene>(root, comm, dir, coupled);
 }
 
 #endif

@@ -11,7 +11,8 @@ namespace tessera {
 std::unique_ptr<DemScene> make_deposition_scene(const ConfigNode& root, MPI_Comm comm, const std::string& dir);
 std::unique_ptr<DemScene> make_bed_scene(const ConfigNode& root, MPI_Comm comm, const std::string& dir);
 std::unique_ptr<DemScene> make_bunker_shot_scene(const ConfigNode& root, MPI_Comm comm, const std::string& dir);
-// The flow solver alone (issue 4): throws InputError in a build without PETSc.
-std::unique_ptr<Scene> make_flow_scene(const ConfigNode& root, MPI_Comm comm, const std::string& dir);
+// The flow solver alone (issue 4), or with bodies (`coupled`, issue 15): throws InputError in a build
+// without PETSc.
+std::unique_ptr<Scene> make_flow_scene(const ConfigNode& root, MPI_Comm comm, const std::string& dir, bool coupled);
 
 }  // namespace tessera

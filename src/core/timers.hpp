@@ -19,6 +19,10 @@ class PhaseTimers {
 
   void add(const std::string& phase, double seconds);
   double total(const std::string& phase) const;
+  // Adds every phase of `other` as prefix + its name (a solver's phases inside a scene's stage).
+  void merge(const PhaseTimers& other, const std::string& prefix) {
+    for (const auto& [phase, t] : other.seconds_) seconds_[prefix + phase] += t;
+  }
   // Collective over comm: every rank must call with the same phases (missing ones count as 0).
   std::vector<std::pair<std::string, Stats>> reduce(MPI_Comm comm) const;
 

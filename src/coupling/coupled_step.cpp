@@ -21,9 +21,9 @@ CoupledSolver::CoupledSolver(FlowSolver& flow, DemSolver& dem, CouplingSettings 
   flow_.keep_stress_divergence(settings_.fluid_force);
 }
 
-void CoupledSolver::start() {
+void CoupledSolver::start(bool correct) {
   solid_.update(dem_);
-  solid_.correct_velocity(flow_);
+  if (correct) solid_.correct_velocity(flow_);
 }
 
 int CoupledSolver::substeps_for(double dt) const {

@@ -38,9 +38,9 @@ class CoupledSolver {
   // Both solvers set up (DemSolver::setup, FlowSolver::initialize); keeps references.
   CoupledSolver(FlowSolver& flow, DemSolver& dem, CouplingSettings settings);
 
-  // The solid phase of the current bodies and the corrected cell velocities (after set-up and
-  // after a restart).
-  void start();
+  // The solid phase of the current bodies; `correct` also corrects the cell velocities (C4) (a fresh
+  // start; a restart's velocities were corrected before they were saved).
+  void start(bool correct = true);
   CoupledStepStats step(double dt);
   // L for a flow step dt.
   int substeps_for(double dt) const;

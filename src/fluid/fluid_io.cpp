@@ -79,39 +79,46 @@ void FieldSeries::write(const FlowSolver& flow) {
     f.write_block("velocity", pack(g, b, {&flow.velocity(0), &flow.velocity(1), &flow.velocity(2)}).data(), b.global,
                   b.offset, b.count, 3);
     f.write_block("pressure", pack(g, b, {&flow.pressure()}).data(), b.global, b.offset, b.count, 1);
+    for (const auto& [nm, field] : extra_) f.write_block(nm, pack(g, b, {field}).data(), b.global, b.offset, b.count, 1);
   }
   times_.push_back(flow.time());
   if (!root) return;
-  // XDMF index: a 3DCoRectMesh (dimensions, origin and spacing in z, y, x order) with cell data.
+  std::string grids;
+  for (int k = 0; k < count(); ++k) grids += grid_xml(g, k, "");
+  write_file_atomically(dir_ + "/fields.xmf", "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n<Domain>\n"
+                                               "<Grid Name=\"flow\" GridType=\"Collection\" CollectionType=\"Temporal\">\n" +
+                                                   grids + "</Grid>\n</Domain>\n</Xdmf>\n");
+}
+
+// A 3DCoRectMesh (dimensions, origin and spacing in z, y, x order) with cell data.
+std::string FieldSeries::grid_xml(const FluidGrid& g, int s, const std::string& prefix) const {
   const auto& n = g.cells();
   std::ostringstream x;
   x.precision(17);
-  x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n<Domain>\n"
-    << "<Grid Name=\"flow\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
   const std::string dims = std::to_string(n[2]) + " " + std::to_string(n[1]) + " " + std::to_string(n[0]);
-  for (int s = 0; s < count(); ++s) {
-    char file[64];
-    std::snprintf(file, sizeof file, "fields_%05d.h5", s);
-    x << "<Grid Name=\"fields\" GridType=\"Uniform\">\n<Time Value=\"" << times_[s] << "\"/>\n"
-      << "<Topology TopologyType=\"3DCoRectMesh\" Dimensions=\"" << n[2] + 1 << " " << n[1] + 1 << " " << n[0] + 1
-      << "\"/>\n<Geometry GeometryType=\"ORIGIN_DXDYDZ\">\n"
-      << "<DataItem Dimensions=\"3\" Format=\"XML\">" << g.lo().z << " " << g.lo().y << " " << g.lo().x
-      << "</DataItem>\n<DataItem Dimensions=\"3\" Format=\"XML\">" << g.h(2) << " " << g.h(1) << " " << g.h(0)
-      << "</DataItem>\n</Geometry>\n";
-    auto attr = [&](const char* nm, const char* type, int comps) {
-      x << "<Attribute Name=\"" << nm << "\" AttributeType=\"" << type << "\" Center=\"Cell\">\n"
-        << "<DataItem Dimensions=\"" << dims << (comps > 1 ? " 3" : "")
-        << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << file << ":/" << nm << "</DataItem>\n"
-        << "</Attribute>\n";
-    };
-    attr("liquid_fraction", "Scalar", 1);
-    attr("velocity", "Vector", 3);
-    attr("pressure", "Scalar", 1);
-    x << "</Grid>\n";
-  }
-  x << "</Grid>\n</Domain>\n</Xdmf>\n";
-  write_file_atomically(dir_ + "/fields.xmf", x.str());
+  char name[64];
+  std::snprintf(name, sizeof name, "fields_%05d.h5", s);
+  const std::string file = prefix + name;
+  x << "<Grid Name=\"fields\" GridType=\"Uniform\">\n<Time Value=\"" << times_.at(std::size_t(s)) << "\"/>\n"
+    << "<Topology TopologyType=\"3DCoRectMesh\" Dimensions=\"" << n[2] + 1 << " " << n[1] + 1 << " " << n[0] + 1
+    << "\"/>\n<Geometry GeometryType=\"ORIGIN_DXDYDZ\">\n"
+    << "<DataItem Dimensions=\"3\" Format=\"XML\">" << g.lo().z << " " << g.lo().y << " " << g.lo().x
+    << "</DataItem>\n<DataItem Dimensions=\"3\" Format=\"XML\">" << g.h(2) << " " << g.h(1) << " " << g.h(0)
+    << "</DataItem>\n</Geometry>\n";
+  auto attr = [&](const std::string& nm, const char* type, int comps) {
+    x << "<Attribute Name=\"" << nm << "\" AttributeType=\"" << type << "\" Center=\"Cell\">\n"
+      << "<DataItem Dimensions=\"" << dims << (comps > 1 ? " 3" : "")
+      << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << file << ":/" << nm << "</DataItem>\n"
+      << "</Attribute>\n";
+  };
+  attr("liquid_fraction", "Scalar", 1);
+  attr("velocity", "Vector", 3);
+  attr("pressure", "Scalar", 1);
+  for (const auto& e : extra_) attr(e.first, "Scalar", 1);
+  x << "</Grid>\n";
+  return x.str();
 }
+
 
 void write_flow_checkpoint(const std::string& path, const FlowSolver& flow) {
   const FluidGrid& g = flow.grid();

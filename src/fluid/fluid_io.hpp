@@ -16,14 +16,21 @@ namespace tessera {
 class FieldSeries {
  public:
   explicit FieldSeries(std::string dir) : dir_(std::move(dir)) {}
+  // A further cell scalar written with every snapshot (ghosted layout of the flow's grid; the
+  // coupling's solid fraction). The pointer must outlive the series.
+  void add_field(std::string name, const std::vector<double>* field) { extra_.emplace_back(std::move(name), field); }
   // Collective. Writes one snapshot and rewrites the XDMF index (rank 0).
   void write(const FlowSolver& flow);
   int count() const { return int(times_.size()); }
   bool written_at(double time) const { return !times_.empty() && times_.back() == time; }
+  double time_of(int s) const { return times_.at(std::size_t(s)); }
+  // The XDMF <Grid> of snapshot s; `prefix` goes before the HDF5 file's name.
+  std::string grid_xml(const FluidGrid& g, int s, const std::string& prefix) const;
 
  private:
   std::string dir_;
   std::vector<double> times_;
+  std::vector<std::pair<std::string, const std::vector<double>*>> extra_;
 };
 
 // Collective.

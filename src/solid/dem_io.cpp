@@ -30,65 +30,60 @@ int comm_rank(MPI_Comm c) {
   return r;
 }
 
-void write_xdmf(const std::string& path, const std::vector<std::pair<double, std::pair<std::string, long>>>& e) {
+// One snapshot's bodies: a Polyvertex grid (file: the HDF5 path as the index sees it).
+std::string bodies_grid(double time, const std::string& file, long n) {
   std::ostringstream o;
   o << std::setprecision(17);
-  o << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
-    << "  <Grid Name=\"bodies\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
-  for (const auto& [time, fe] : e) {
-    const auto& [file, n] = fe;
-    auto item = [&](const std::string& ds, int cols) {
-      std::ostringstream s;
-      s << "<DataItem Format=\"HDF\" NumberType=\"" << (ds == "id" ? "Int\" Precision=\"8" : "Float\" Precision=\"8")
-        << "\" Dimensions=\"" << n << (cols > 1 ? " " + std::to_string(cols) : "") << "\">" << file << ":/" << ds
-        << "</DataItem>";
-      return s.str();
-    };
-    o << "   <Grid Name=\"bodies\" GridType=\"Uniform\">\n"
-      << "    <Time Value=\"" << time << "\"/>\n"
-      << "    <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n << "\"/>\n"
-      << "    <Geometry GeometryType=\"XYZ\">" << item("position", 3) << "</Geometry>\n"
-      << "    <Attribute Name=\"velocity\" AttributeType=\"Vector\" Center=\"Node\">" << item("velocity", 3)
-      << "</Attribute>\n"
-      << "    <Attribute Name=\"angular_velocity\" AttributeType=\"Vector\" Center=\"Node\">"
-      << item("angular_velocity", 3) << "</Attribute>\n"
-      << "    <Attribute Name=\"orientation\" AttributeType=\"Matrix\" Center=\"Node\">" << item("orientation", 4)
-      << "</Attribute>\n"
-      << "    <Attribute Name=\"radius\" AttributeType=\"Scalar\" Center=\"Node\">" << item("radius", 1)
-      << "</Attribute>\n"
-      << "    <Attribute Name=\"id\" AttributeType=\"Scalar\" Center=\"Node\">" << item("id", 1) << "</Attribute>\n"
-      << "    <Attribute Name=\"shape\" AttributeType=\"Scalar\" Center=\"Node\">" << item("shape", 1)
-      << "</Attribute>\n"
-      << "   </Grid>\n";
-  }
-  o << "  </Grid>\n </Domain>\n</Xdmf>\n";
-  write_file_atomically(path, o.str());
+  auto item = [&](const std::string& ds, int cols) {
+    std::ostringstream s;
+    s << "<DataItem Format=\"HDF\" NumberType=\"" << (ds == "id" ? "Int\" Precision=\"8" : "Float\" Precision=\"8")
+      << "\" Dimensions=\"" << n << (cols > 1 ? " " + std::to_string(cols) : "") << "\">" << file << ":/" << ds
+      << "</DataItem>";
+    return s.str();
+  };
+  o << "   <Grid Name=\"bodies\" GridType=\"Uniform\">\n"
+    << "    <Time Value=\"" << time << "\"/>\n"
+    << "    <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n << "\"/>\n"
+    << "    <Geometry GeometryType=\"XYZ\">" << item("position", 3) << "</Geometry>\n"
+    << "    <Attribute Name=\"velocity\" AttributeType=\"Vector\" Center=\"Node\">" << item("velocity", 3)
+    << "</Attribute>\n"
+    << "    <Attribute Name=\"angular_velocity\" AttributeType=\"Vector\" Center=\"Node\">"
+    << item("angular_velocity", 3) << "</Attribute>\n"
+    << "    <Attribute Name=\"orientation\" AttributeType=\"Matrix\" Center=\"Node\">" << item("orientation", 4)
+    << "</Attribute>\n"
+    << "    <Attribute Name=\"radius\" AttributeType=\"Scalar\" Center=\"Node\">" << item("radius", 1)
+    << "</Attribute>\n"
+    << "    <Attribute Name=\"id\" AttributeType=\"Scalar\" Center=\"Node\">" << item("id", 1) << "</Attribute>\n"
+    << "    <Attribute Name=\"shape\" AttributeType=\"Scalar\" Center=\"Node\">" << item("shape", 1)
+    << "</Attribute>\n"
+    << "   </Grid>\n";
+  return o.str();
 }
 
-// Grain surfaces: one unstructured triangle grid per snapshot.
-void write_surface_xdmf(const std::string& path, const std::vector<std::tuple<double, std::string, long, long>>& e) {
+// One snapshot's grain surfaces: an unstructured triangle grid.
+std::string grains_grid(double time, const std::string& file, long nodes, long tris) {
   std::ostringstream o;
   o << std::setprecision(17);
-  o << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
-    << "  <Grid Name=\"grains\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
-  for (const auto& [time, file, nodes, tris] : e) {
-    o << "   <Grid Name=\"grains\" GridType=\"Uniform\">\n"
-      << "    <Time Value=\"" << time << "\"/>\n"
-      << "    <Topology TopologyType=\"Triangle\" NumberOfElements=\"" << tris << "\">"
-      << "<DataItem Format=\"HDF\" NumberType=\"Int\" Precision=\"8\" Dimensions=\"" << tris << " 3\">" << file
-      << ":/surface_triangles</DataItem></Topology>\n"
-      << "    <Geometry GeometryType=\"XYZ\"><DataItem Format=\"HDF\" NumberType=\"Float\" Precision=\"8\" "
-      << "Dimensions=\"" << nodes << " 3\">" << file << ":/surface_nodes</DataItem></Geometry>\n"
-      << "    <Attribute Name=\"velocity\" AttributeType=\"Vector\" Center=\"Node\"><DataItem Format=\"HDF\" "
-      << "NumberType=\"Float\" Precision=\"8\" Dimensions=\"" << nodes << " 3\">" << file
-      << ":/surface_velocity</DataItem></Attribute>\n"
-      << "    <Attribute Name=\"id\" AttributeType=\"Scalar\" Center=\"Cell\"><DataItem Format=\"HDF\" "
-      << "NumberType=\"Int\" Precision=\"8\" Dimensions=\"" << tris << "\">" << file
-      << ":/surface_id</DataItem></Attribute>\n"
-      << "   </Grid>\n";
-  }
-  o << "  </Grid>\n </Domain>\n</Xdmf>\n";
-  write_file_atomically(path, o.str());
+  o << "   <Grid Name=\"grains\" GridType=\"Uniform\">\n"
+    << "    <Time Value=\"" << time << "\"/>\n"
+    << "    <Topology TopologyType=\"Triangle\" NumberOfElements=\"" << tris << "\">"
+    << "<DataItem Format=\"HDF\" NumberType=\"Int\" Precision=\"8\" Dimensions=\"" << tris << " 3\">" << file
+    << ":/surface_triangles</DataItem></Topology>\n"
+    << "    <Geometry GeometryType=\"XYZ\"><DataItem Format=\"HDF\" NumberType=\"Float\" Precision=\"8\" "
+    << "Dimensions=\"" << nodes << " 3\">" << file << ":/surface_nodes</DataItem></Geometry>\n"
+    << "    <Attribute Name=\"velocity\" AttributeType=\"Vector\" Center=\"Node\"><DataItem Format=\"HDF\" "
+    << "NumberType=\"Float\" Precision=\"8\" Dimensions=\"" << nodes << " 3\">" << file
+    << ":/surface_velocity</DataItem></Attribute>\n"
+    << "    <Attribute Name=\"id\" AttributeType=\"Scalar\" Center=\"Cell\"><DataItem Format=\"HDF\" "
+    << "NumberType=\"Int\" Precision=\"8\" Dimensions=\"" << tris << "\">" << file
+    << ":/surface_id</DataItem></Attribute>\n"
+    << "   </Grid>\n";
+  return o.str();
+}
+
+std::string temporal_index(const char* name, const std::string& grids) {
+  return std::string("<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n  <Grid Name=\"") + name +
+         "\" GridType=\"Collection\" CollectionType=\"Temporal\">\n" + grids + "  </Grid>\n </Domain>\n</Xdmf>\n";
 }
 
 }  // namespace
@@ -149,15 +144,20 @@ void SnapshotSeries::write(DemSolver& dem) {
   }
   entries_.push_back({dem.time(), name, n, surface_nodes, surface_triangles});
   if (comm_rank(comm) == 0) {
-    std::vector<std::pair<double, std::pair<std::string, long>>> e;
-    for (const auto& x : entries_) e.push_back({x.time, {x.file, x.bodies}});
-    write_xdmf(dir_ + "/particles.xmf", e);
-    if (dem.shaped()) {
-      std::vector<std::tuple<double, std::string, long, long>> g;
-      for (const auto& x : entries_) g.emplace_back(x.time, x.file, x.surface_nodes, x.surface_triangles);
-      write_surface_xdmf(dir_ + "/grains.xmf", g);
+    std::string bodies, grains;
+    for (std::size_t k = 0; k < entries_.size(); ++k) {
+      bodies += grid_xml(k, "", false);
+      if (dem.shaped()) grains += grid_xml(k, "", true);
     }
+    write_file_atomically(dir_ + "/particles.xmf", temporal_index("bodies", bodies));
+    if (dem.shaped()) write_file_atomically(dir_ + "/grains.xmf", temporal_index("grains", grains));
   }
+}
+
+std::string SnapshotSeries::grid_xml(std::size_t k, const std::string& prefix, bool surfaces) const {
+  const Entry& e = entries_.at(k);
+  return surfaces ? grains_grid(e.time, prefix + e.file, e.surface_nodes, e.surface_triangles)
+                  : bodies_grid(e.time, prefix + e.file, e.bodies);
 }
 
 void write_checkpoint(const std::string& path, DemSolver& dem, const CheckpointExtras& extras) {

@@ -20,6 +20,10 @@ class SnapshotSeries {
   // orientation, so that ParaView draws every grain's shape. Completes the step first (DemSolver::complete_step).
   void write(DemSolver& dem);
   std::size_t count() const { return entries_.size(); }
+  double time_of(std::size_t k) const { return entries_.at(k).time; }
+  // The XDMF <Grid> of snapshot k: the bodies (Polyvertex) or, surfaces = true, the grains'
+  // surfaces; `prefix` goes before the HDF5 file's name (an index in another directory).
+  std::string grid_xml(std::size_t k, const std::string& prefix, bool surfaces) const;
 
  private:
   struct Entry {
