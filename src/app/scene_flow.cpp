@@ -25,6 +25,7 @@
 #include "app/run_loop.hpp"
 #include "app/scenes.hpp"
 #include "core/errors.hpp"
+#include "core/exact_sum.hpp"
 #include "core/text_file.hpp"
 
 #if defined(TESSERA_HAVE_PETSC)
@@ -158,6 +159,7 @@ class FlowScene final : public SteppedScene {
   void read_bodies(const ConfigNode& root, const std::string& case_dir);
   void create_bodies();
   void check_bodies(const RunOptions& opt);
+  std::string body_series();
   void write_scene_index(const RunOptions& opt);
   void set_initial_state();
   double front_position() const;
@@ -274,6 +276,23 @@ void FlowScene::create_bodies() {
   dem_->setup(true);
 }
 
+// The bodies' columns of series.csv (collective): kinetic energy, largest speed, mean position and
+// velocity (exact sums: the same on any rank count for the same state), sub-steps of the last step.
+std::string FlowScene::body_series() {
+  const DemStats st = dem_->stats();
+  const ParticleStore& p = dem_->particles();
+  std::array<ExactSum, 6> sums;
+  for (std::size_t i = 0; i < p.owned; ++i)
+    for (int k = 0; k < 3; ++k) sums[k].add(p.x[3 * i + k]), sums[3 + k].add(p.v[3 * i + k]);
+  ExactSum::all_reduce(sums, decomp_->comm());
+  std::ostringstream o;
+  o.precision(10);
+  o << ',' << st.kinetic_translational + st.kinetic_rotational << ',' << st.max_speed;
+  for (auto& e : sums) o << ',' << (st.bodies ? e.value() / double(st.bodies) : 0.0);
+  o << ',' << last_substeps_;
+  return o.str();
+}
+
 // Every run.check_interval: the bodies' state is finite and no overlap exceeds the bound.
 void FlowScene::check_bodies(const RunOptions& opt) {
   if (!checks_.due(flow_->time(), flow_->last_dt())) return;
@@ -382,7 +401,7 @@ void FlowScene::begin_output(const RunOptions& opt) {
   const long bodies = dem_ ? dem_->stats().bodies : 0;  // collective
   if (root && !opt.quiet) {
     const auto& d = decomp_->dims();
-    std::printf("tessera %s: scene flow, %d x %d x %d cells, %d ranks (grid %dx%dx%d), Poisson %s\n", kTesseraVersion,
+    std::printf("tessera %s: scene %s, %d x %d x %d cells, %d ranks (grid %dx%dx%d), Poisson %s\n", kTesseraVersion, name(),
                 g.cells()[0], g.cells()[1], g.cells()[2], decomp_->size(), d[0], d[1], d[2],
                 flow_->poisson_description().c_str());
     if (coupled_)
@@ -397,7 +416,11 @@ void FlowScene::begin_output(const RunOptions& opt) {
     series_.open(opt.output_dir + "/series.csv", append ? std::ios::app : std::ios::trunc);
     if (!append)
       series_ << "time,dt,dt_limit,poisson_iterations,poisson_residual,liquid_volume,kinetic_energy,max_speed,"
-                 "front_position\n";
+                 "front_position"
+              << (dem_ ? ",body_kinetic_energy,body_max_speed,body_mean_x,body_mean_y,body_mean_z,body_mean_vx,"
+                         "body_mean_vy,body_mean_vz,substeps"
+                       : "")
+              << "\n";
     series_.precision(10);
   }
   fields_ = std::make_unique<FieldSeries>(opt.output_dir + "/fields");
@@ -481,9 +504,11 @@ bool FlowScene::after_step(const RunOptions& opt) {
   if (sample) {
     next_series_ = series_interval_ > 0 ? Schedule(series_interval_, flow_->time()).next() : flow_->time();
     const double volume = flow_->liquid_volume(), ke = flow_->kinetic_energy(), front = front_position();
+    std::string bodies;
+    if (dem_) bodies = body_series();
     if (flow_->grid().rank() == 0)
       series_ << flow_->time() << ',' << last_.dt << ',' << last_limit_ << ',' << last_.poisson.iterations << ','
-              << last_.poisson.residual << ',' << volume << ',' << ke << ',' << vmax << ',' << front << '\n';
+              << last_.poisson.residual << ',' << volume << ',' << ke << ',' << vmax << ',' << front << bodies << '\n';
   }
   return false;
 }

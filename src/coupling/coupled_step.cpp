@@ -16,7 +16,7 @@ CouplingSettings CouplingSettings::from_config(const ConfigNode& c) {
 }
 
 CoupledSolver::CoupledSolver(FlowSolver& flow, DemSolver& dem, CouplingSettings settings)
-    : flow_(flow), dem_(dem), settings_(settings), solid_(flow.grid(), dem), dem_stable_dt_(dem.dt()) {
+    : flow_(flow), dem_(dem), settings_(settings), solid_(flow.grid(), dem, std::max(flow.settings().liquid.density, flow.settings().gas.density)), dem_stable_dt_(dem.dt()) {
   dem_.use_external_loads(settings_.fluid_force);
   flow_.keep_stress_divergence(settings_.fluid_force);
 }
@@ -55,6 +55,7 @@ CoupledStepStats CoupledSolver::step(double dt) {
   }
   {
     auto t = timers_.scope("correction");
+    if (settings_.fluid_force) solid_.exchange_momentum(flow_, dem_);
     solid_.correct_velocity(flow_);
   }
   return st;

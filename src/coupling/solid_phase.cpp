@@ -8,9 +8,11 @@
 #include "core/exact_sum.hpp"
 #include "solid/rigid_rotation.hpp"
 
+#include <Eigen/Dense>
+
 namespace tessera {
 
-SolidPhase::SolidPhase(const FluidGrid& grid, const DemSolver& dem) : grid_(grid) {
+SolidPhase::SolidPhase(const FluidGrid& grid, const DemSolver& dem, double fluid_density) : grid_(grid) {
   const ParticleStore& p = dem.particles();
   int spheres = 0;
   for (std::size_t i = 0; i < p.owned; ++i) spheres |= p.shape[i] == 0;
@@ -21,6 +23,18 @@ SolidPhase::SolidPhase(const FluidGrid& grid, const DemSolver& dem) : grid_(grid
   for (int d = 0; d < 3; ++d)
     if (grid.periodic(d))
       throw InputError("fluid.boundaries", "periodic", "walls or outflow: coupled bodies do not cross periodic sides");
+  // The lightest body against the denser fluid: below kMinDensityRatio the explicit fluid force
+  // (theory C6a) makes the body's motion oscillate and grow.
+  double lightest = 1e300;
+  for (std::size_t i = 0; i < p.owned; ++i)
+    lightest = std::min(lightest, p.mass[i] / dem.shapes()[static_cast<std::size_t>(p.shape[i] - 1)].volume);
+  MPI_Allreduce(MPI_IN_PLACE, &lightest, 1, MPI_DOUBLE, MPI_MIN, grid.comm());
+  if (lightest < kMinDensityRatio * fluid_density)
+    throw InputError("solid.materials", "a body of " + std::to_string(lightest) + " kg/m^3",
+                     "bodies at least " + std::to_string(kMinDensityRatio).substr(0, 3) +
+                         " times the liquid's density (" + std::to_string(fluid_density) +
+                         " kg/m^3): lighter bodies make the explicit fluid force unstable (measured: stable at "
+                         "0.25, growing oscillations at 0.1; docs/theory.md C6a)");
   const double half_cell = 0.5 * std::max({grid.h(0), grid.h(1), grid.h(2)});
   for (const ShapeTemplate& t : dem.shapes()) {
     double reach = 0;
@@ -69,23 +83,114 @@ void SolidPhase::update(const DemSolver& dem) {
                        [&](int i, int j, int k, double v) { scratch_.emplace_back(g.at(i, j, k), v); });
     // One entry per cell, its tetrahedra summed in mesh order.
     std::stable_sort(scratch_.begin(), scratch_.end(), [](const auto& a, const auto& c) { return a.first < c.first; });
-    const double rho = p.mass[b] / t.volume;
-    const Vec3 v = p.vel(b), w = p.ang(b);
     for (std::size_t e = 0; e < scratch_.size();) {
       const std::size_t c = scratch_[e].first;
       double vol = 0;
       for (; e < scratch_.size() && scratch_[e].first == c; ++e) vol += scratch_[e].second;
       cell_.push_back(c);
       volume_.push_back(vol);
-      const auto idx = g.index(c);
-      const Vec3 u = v + cross(w, g.centre(idx[0], idx[1], idx[2]) - xb);  // rigid motion at the centre
       alpha_[c] += vol / cell_volume;
-      solid_mass_[c] += rho * vol;
-      for (int d = 0; d < 3; ++d) solid_momentum_[d][c] += rho * vol * u[d];
     }
     body_first_.push_back(cell_.size());
   }
   g.exchange(alpha_);
+  solid_momentum(dem);
+}
+
+void SolidPhase::solid_momentum(const DemSolver& dem) {
+  const FluidGrid& g = grid_;
+  const ParticleStore& p = dem.particles();
+  std::fill(solid_mass_.begin(), solid_mass_.end(), 0.0);
+  for (auto& m : solid_momentum_) std::fill(m.begin(), m.end(), 0.0);
+  for (std::size_t n = 0; n < body_index_.size(); ++n) {
+    const std::size_t b = body_index_[n];
+    const double rho = p.mass[b] / dem.shapes()[static_cast<std::size_t>(p.shape[b] - 1)].volume;
+    const Vec3 xb = p.pos(b), v = p.vel(b), w = p.ang(b);
+    for (std::size_t e = body_first_[n]; e < body_first_[n + 1]; ++e) {
+      const std::size_t c = cell_[e];
+      const auto idx = g.index(c);
+      const Vec3 u = v + cross(w, g.centre(idx[0], idx[1], idx[2]) - xb);  // rigid motion at the centre
+      const double m = rho * volume_[e];
+      solid_mass_[c] += m;
+      for (int d = 0; d < 3; ++d) solid_momentum_[d][c] += m * u[d];
+    }
+  }
+}
+
+// C4a. With U_c = V + w x r_c the body's motion at cell c (r_c = x_c - x_b) and mu_c the reduced
+// mass of the cell's fluid (m_f) and the body's share of the cell (m_bc), mu_c = m_f m_bc / (m_f + m_s),
+// the correction moves the fluid's momentum by mu_c (U'_c - u_c); the body takes the opposite:
+//   M V' = M V + sum mu_c (u_c - U'_c),   I w' = I w + sum mu_c r_c x (u_c - U'_c),
+// linear in (V', w'): [(M + S0) 1, -[S3]x; [S3]x, I + S4] (V', w') = (M V + S1, I w + S2), with
+// S0 = sum mu, S1 = sum mu u, S2 = sum mu r x u, S3 = sum mu r, S4 = sum mu (|r|^2 1 - r r^T):
+// symmetric positive definite. Implicit, so a light body cannot overshoot.
+void SolidPhase::exchange_momentum(const FlowSolver& flow, DemSolver& dem) {
+  const FluidGrid& g = grid_;
+  ParticleStore& p = dem.particles();
+  const double cell_volume = g.cell_volume();
+  const auto& rho_f = flow.density();
+  constexpr int kWidth = 16;
+  loads_.assign(kWidth * p.size(), 0.0);
+  for (std::size_t n = 0; n < body_index_.size(); ++n) {
+    const std::size_t b = body_index_[n];
+    const double rho = p.mass[b] / dem.shapes()[static_cast<std::size_t>(p.shape[b] - 1)].volume;
+    const Vec3 xb = p.pos(b);
+    double* acc = &loads_[kWidth * b];
+    for (std::size_t e = body_first_[n]; e < body_first_[n + 1]; ++e) {
+      const std::size_t c = cell_[e];
+      const double mf = rho_f[c] * cell_volume * std::max(0.0, 1 - alpha_[c]);
+      if (mf == 0) continue;
+      const double mu = mf * rho * volume_[e] / (mf + solid_mass_[c]);
+      const auto idx = g.index(c);
+      const Vec3 r = g.centre(idx[0], idx[1], idx[2]) - xb;
+      const Vec3 u{flow.velocity(0)[c], flow.velocity(1)[c], flow.velocity(2)[c]};
+      const Vec3 ru = cross(r, u);
+      const double rr = dot(r, r);
+      const double add[kWidth] = {mu,          mu * u.x,    mu * u.y,    mu * u.z,         mu * ru.x,        mu * ru.y,
+                                  mu * ru.z,   mu * r.x,    mu * r.y,    mu * r.z,         mu * (rr - r.x * r.x),
+                                  mu * (rr - r.y * r.y),    mu * (rr - r.z * r.z),         -mu * r.x * r.y,
+                                  -mu * r.x * r.z,          -mu * r.y * r.z};
+      for (int k = 0; k < kWidth; ++k) acc[k] += add[k];
+    }
+  }
+  dem.reverse_add_ghosts(loads_, kWidth);
+  for (std::size_t b = 0; b < p.owned; ++b) {
+    const double* a = &loads_[kWidth * b];
+    if (a[0] == 0) continue;
+    const ShapeTemplate& t = dem.shapes()[static_cast<std::size_t>(p.shape[b] - 1)];
+    const double rho = p.mass[b] / t.volume;
+    const Quaternion q{p.q[4 * b], p.q[4 * b + 1], p.q[4 * b + 2], p.q[4 * b + 3]};
+    // World inertia R diag(I) R^T.
+    Eigen::Matrix3d R;
+    for (int k = 0; k < 3; ++k) {
+      Vec3 e;
+      e[k] = 1;
+      const Vec3 col = q.rotate(e);
+      for (int i = 0; i < 3; ++i) R(i, k) = col[i];
+    }
+    const Eigen::Vector3d principal(rho * t.inertia_per_density.x, rho * t.inertia_per_density.y,
+                                    rho * t.inertia_per_density.z);
+    const Eigen::Matrix3d inertia = R * principal.asDiagonal() * R.transpose();
+    const double M = p.mass[b];
+    Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> rhs;
+    Eigen::Matrix3d skew;  // [S3]x
+    skew << 0, -a[9], a[8], a[9], 0, -a[7], -a[8], a[7], 0;
+    Eigen::Matrix3d s4;
+    s4 << a[10], a[13], a[14], a[13], a[11], a[15], a[14], a[15], a[12];
+    A.block<3, 3>(0, 0) = Eigen::Matrix3d::Identity() * (M + a[0]);
+    A.block<3, 3>(0, 3) = -skew;
+    A.block<3, 3>(3, 0) = skew;
+    A.block<3, 3>(3, 3) = inertia + s4;
+    const Eigen::Vector3d v(p.v[3 * b], p.v[3 * b + 1], p.v[3 * b + 2]);
+    const Eigen::Vector3d w(p.omega[3 * b], p.omega[3 * b + 1], p.omega[3 * b + 2]);
+    rhs.head<3>() = M * v + Eigen::Vector3d(a[1], a[2], a[3]);
+    rhs.tail<3>() = inertia * w + Eigen::Vector3d(a[4], a[5], a[6]);
+    const Eigen::Matrix<double, 6, 1> x = A.ldlt().solve(rhs);
+    for (int k = 0; k < 3; ++k) p.v[3 * b + k] = x[k], p.omega[3 * b + k] = x[3 + k];
+  }
+  dem.refresh_ghosts();
+  solid_momentum(dem);
 }
 
 void SolidPhase::fluid_loads(const FlowSolver& flow, DemSolver& dem) {

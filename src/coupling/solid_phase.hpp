@@ -10,6 +10,9 @@
 //                        F_b = sum_c V_bc (-grad p + div tau)_c, T_b = sum_c V_bc (x_c - x_b) x (...),
 //                        over this rank's cells, then the ghost copies' shares sent back to the owner
 //                        (Halo::reverse_add); written to the bodies' external loads.
+//   exchange_momentum()  the no-slip exchange between each body and the fluid in its cells, implicit
+//                        (C4a): the body's velocity and spin after the exchange solve one 6 x 6
+//                        system; the fluid loses exactly what the body gains.
 //   correct_velocity()   the cell velocity becomes the mass average of the fluid in the cell and the
 //                        solid in it (C4): u = (rho_f V_f u + sum_b rho_b V_bc u_b) / (rho_f V_f + m_s).
 //
@@ -36,12 +39,15 @@ struct SolidPhaseStats {
 
 class SolidPhase {
  public:
-  // Checks that the coupling can run: bodies made of tetrahedra (shape templates), no periodic
-  // flow boundary, and the tetrahedra plus half a cell within the DEM's ghost reach.
-  SolidPhase(const FluidGrid& grid, const DemSolver& dem);
+  // Checks that the coupling can run: bodies made of tetrahedra (shape templates), none lighter than
+  // kMinDensityRatio times `fluid_density` (the denser fluid's), no periodic flow boundary, and the
+  // tetrahedra plus half a cell within the DEM's ghost reach.
+  SolidPhase(const FluidGrid& grid, const DemSolver& dem, double fluid_density);
+  static constexpr double kMinDensityRatio = 0.3;
 
   void update(const DemSolver& dem);
   void fluid_loads(const FlowSolver& flow, DemSolver& dem);
+  void exchange_momentum(const FlowSolver& flow, DemSolver& dem);
   void correct_velocity(FlowSolver& flow) const;
 
   // Ghosted layout of the grid (owned cells set, ghosts exchanged).
@@ -57,7 +63,8 @@ class SolidPhase {
   std::vector<std::size_t> cell_;
   std::vector<double> volume_;
   double body_volume_ = 0;  // owned bodies
-  std::vector<double> loads_;  // 6 per local body (reverse communication)
+  std::vector<double> loads_;  // 6 per local body (reverse communication); 16 in the exchange
+  void solid_momentum(const DemSolver& dem);  // m_s and P_s per cell from the bodies' velocities now
   TetRasterizer raster_;
   std::vector<std::pair<std::size_t, double>> scratch_;
 };
