@@ -210,6 +210,7 @@ class FlowScene final : public SteppedScene {
   std::unique_ptr<SnapshotSeries> bodies_out_;
   std::string output_dir_;
   int last_substeps_ = 0;
+  double free_liquid0_ = 0;  // liquid outside the bodies at the start of this run
   long substeps_total_ = 0;
 };
 
@@ -394,7 +395,10 @@ void FlowScene::begin_output(const RunOptions& opt) {
       fail(opt, std::string("initial projection: ") + e.what());
     }
   }
-  if (coupled_) coupled_->start(!opt.restart);  // a restart's velocities were corrected when saved
+  if (coupled_) {
+    coupled_->start(!opt.restart);  // a restart's velocities were corrected when saved
+    free_liquid0_ = coupled_->solid().stats(*flow_).free_liquid_volume;
+  }
   volume0_ = flow_->liquid_volume();
   peak_speed_ = flow_->max_speed();
   output_dir_ = opt.output_dir;
@@ -562,7 +566,7 @@ void FlowScene::summarise(nlohmann::json& s) {
                  {"snapshots", fields_->count() ? "fields/fields.xmf" : ""}};
   if (!coupled_) return;
   const DemStats b = dem_->stats();
-  const SolidPhaseStats sp = coupled_->solid().stats();
+  const SolidPhaseStats sp = coupled_->solid().stats(*flow_);
   s["quantities"]["bodies"] = b.bodies;
   s["quantities"]["body_kinetic_energy"] = b.kinetic_translational + b.kinetic_rotational;
   s["quantities"]["body_max_speed"] = b.max_speed;
@@ -570,6 +574,9 @@ void FlowScene::summarise(nlohmann::json& s) {
   s["quantities"]["body_volume"] = sp.body_volume;
   s["quantities"]["solid_volume_error"] = sp.body_volume > 0 ? (sp.solid_volume - sp.body_volume) / sp.body_volume : 0.0;
   s["quantities"]["max_solid_fraction"] = sp.max_fraction;
+  s["quantities"]["free_liquid_volume"] = sp.free_liquid_volume;
+  s["quantities"]["free_liquid_volume_drift"] =
+      free_liquid0_ > 0 ? (sp.free_liquid_volume - free_liquid0_) / free_liquid0_ : 0.0;
   s["coupling"] = {{"dem_stable_dt", coupled_->dem_stable_dt()},
                    {"substeps_per_flow_step", steps_run ? double(substeps_total_) / steps_run : 0.0},
                    {"fluid_force", coupling_.fluid_force}};

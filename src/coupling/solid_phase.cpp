@@ -240,17 +240,19 @@ void SolidPhase::correct_velocity(FlowSolver& flow) const {
   flow.velocity_changed();
 }
 
-SolidPhaseStats SolidPhase::stats() const {
+SolidPhaseStats SolidPhase::stats(const FlowSolver& flow) const {
   const FluidGrid& g = grid_;
   SolidPhaseStats s;
-  ExactSum sums[2];
+  ExactSum sums[3];
   double amax = 0;
   long covered = 0;
   for (int k = g.begin(2); k < g.end(2); ++k)
     for (int j = g.begin(1); j < g.end(1); ++j)
       for (int i = g.begin(0); i < g.end(0); ++i) {
-        const double a = alpha_[g.at(i, j, k)];
+        const std::size_t c = g.at(i, j, k);
+        const double a = alpha_[c];
         sums[0].add(a * g.cell_volume());
+        sums[2].add(flow.fraction()[c] * (1 - std::min(a, 1.0)) * g.cell_volume());
         amax = std::max(amax, a);
         covered += a > 0;
       }
@@ -258,6 +260,7 @@ SolidPhaseStats SolidPhase::stats() const {
   ExactSum::all_reduce(sums, g.comm());
   s.solid_volume = sums[0].value();
   s.body_volume = sums[1].value();
+  s.free_liquid_volume = sums[2].value();
   s.max_fraction = g.reduce_max(amax);
   MPI_Allreduce(&covered, &s.covered_cells, 1, MPI_LONG, MPI_SUM, g.comm());
   return s;

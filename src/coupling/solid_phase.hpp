@@ -34,6 +34,7 @@ struct SolidPhaseStats {
   double solid_volume = 0;  // sum of alpha_s V_c over the grid (collective)
   double body_volume = 0;   // sum of the bodies' tetrahedra volumes (owned bodies, collective)
   double max_fraction = 0;  // largest alpha_s (above 1 where bodies overlap at contacts)
+  double free_liquid_volume = 0;  // sum f (1 - min(alpha_s, 1)) V_c: the liquid outside the bodies
   long covered_cells = 0;
 };
 
@@ -52,7 +53,7 @@ class SolidPhase {
 
   // Ghosted layout of the grid (owned cells set, ghosts exchanged).
   const std::vector<double>& fraction() const { return alpha_; }
-  SolidPhaseStats stats() const;  // collective
+  SolidPhaseStats stats(const FlowSolver& flow) const;  // collective
 
  private:
   const FluidGrid& grid_;

@@ -116,7 +116,7 @@ TEST(SolidFraction, HoldsTheBodiesExactlyWithTheSameBitsOnAnyRankCount) {
   flow.initialize([](int, int, int) { return FlowSolver::CellState{1.0, {}}; });
   SolidPhase solid(flow.grid(), *rig.dem, 1000);
   solid.update(*rig.dem);
-  const SolidPhaseStats st = solid.stats();
+  const SolidPhaseStats st = solid.stats(flow);
   const double v_body = rig.dem->shapes()[0].volume;
   EXPECT_NEAR(st.body_volume, 27 * v_body, 1e-15 * 27 * v_body);
   EXPECT_NEAR(st.solid_volume, st.body_volume, 1e-13 * st.body_volume);
