@@ -12,11 +12,13 @@ CouplingSettings CouplingSettings::from_config(const ConfigNode& c) {
   // Unknown keys are reported by Config::check_unused.
   if (c.has("substeps")) s.substeps = static_cast<int>(c.integer("substeps", 1, 1'000'000));
   s.fluid_force = c.flag("fluid_force", true);
+  s.layout_tolerance = c.real("layout_tolerance", Dim::none, Range::closed(0, 0.25), s.layout_tolerance);
   return s;
 }
 
 CoupledSolver::CoupledSolver(FlowSolver& flow, DemSolver& dem, CouplingSettings settings)
-    : flow_(flow), dem_(dem), settings_(settings), solid_(flow.grid(), dem, std::max(flow.settings().liquid.density, flow.settings().gas.density)), dem_stable_dt_(dem.dt()) {
+    : flow_(flow), dem_(dem), settings_(settings), solid_(flow.grid(), dem, std::max(flow.settings().liquid.density, flow.settings().gas.density),
+             settings.layout_tolerance), dem_stable_dt_(dem.dt()) {
   dem_.use_external_loads(settings_.fluid_force);
   flow_.keep_stress_divergence(settings_.fluid_force);
 }

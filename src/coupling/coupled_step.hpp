@@ -24,6 +24,7 @@ namespace tessera {
 struct CouplingSettings {
   std::optional<int> substeps;  // L; none: the least L with dt / L <= the DEM's own stable step
   bool fluid_force = true;      // off: the bodies move the flow, the flow does not push them
+  double layout_tolerance = 0.01;  // fraction of the cell: lay-outs reused within it (SolidPhase)
   static CouplingSettings from_config(const ConfigNode& coupling);
 };
 

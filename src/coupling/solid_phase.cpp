@@ -12,7 +12,8 @@
 
 namespace tessera {
 
-SolidPhase::SolidPhase(const FluidGrid& grid, const DemSolver& dem, double fluid_density) : grid_(grid) {
+SolidPhase::SolidPhase(const FluidGrid& grid, const DemSolver& dem, double fluid_density, double layout_tolerance)
+    : grid_(grid), layout_step_(layout_tolerance * std::min({grid.h(0), grid.h(1), grid.h(2)})) {
   const ParticleStore& p = dem.particles();
   int spheres = 0;
   for (std::size_t i = 0; i < p.owned; ++i) spheres |= p.shape[i] == 0;
@@ -69,32 +70,61 @@ void SolidPhase::update(const DemSolver& dem) {
   cell_.clear();
   volume_.clear();
   body_volume_ = 0;
+  ++generation_;
   std::vector<Vec3> world;
   for (const std::size_t b : body_index_) {
     const ShapeTemplate& t = shapes[static_cast<std::size_t>(p.shape[b] - 1)];
     if (b < p.owned) body_volume_ += t.volume;
-    const Quaternion q{p.q[4 * b], p.q[4 * b + 1], p.q[4 * b + 2], p.q[4 * b + 3]};
-    const Vec3 xb = p.pos(b);
-    world.resize(t.nodes.size());
-    for (std::size_t n = 0; n < t.nodes.size(); ++n) world[n] = xb + q.rotate(t.nodes[n]);
-    scratch_.clear();
-    for (const auto& tet : t.tetrahedra)
-      raster_.overlaps(Tet{world[tet[0]], world[tet[1]], world[tet[2]], world[tet[3]]}, cells,
-                       [&](int i, int j, int k, double v) { scratch_.emplace_back(g.at(i, j, k), v); });
-    // One entry per cell, its tetrahedra summed in mesh order.
-    std::stable_sort(scratch_.begin(), scratch_.end(), [](const auto& a, const auto& c) { return a.first < c.first; });
-    for (std::size_t e = 0; e < scratch_.size();) {
-      const std::size_t c = scratch_[e].first;
-      double vol = 0;
-      for (; e < scratch_.size() && scratch_[e].first == c; ++e) vol += scratch_[e].second;
+    const Pose pose = layout_pose(p.pos(b), {p.q[4 * b], p.q[4 * b + 1], p.q[4 * b + 2], p.q[4 * b + 3]});
+    Layout& lay = cache_[p.order[b]];
+    lay.generation = generation_;
+    if (!lay.valid || lay.pose != pose) {
+      ++layouts_;
+      lay.valid = true;
+      lay.pose = pose;
+      const Quaternion q{pose[3], pose[4], pose[5], pose[6]};
+      const Vec3 xb{pose[0], pose[1], pose[2]};
+      world.resize(t.nodes.size());
+      for (std::size_t n = 0; n < t.nodes.size(); ++n) world[n] = xb + q.rotate(t.nodes[n]);
+      scratch_.clear();
+      for (const auto& tet : t.tetrahedra)
+        raster_.overlaps(Tet{world[tet[0]], world[tet[1]], world[tet[2]], world[tet[3]]}, cells,
+                         [&](int i, int j, int k, double v) { scratch_.emplace_back(g.at(i, j, k), v); });
+      // One entry per cell, its tetrahedra summed in mesh order.
+      std::stable_sort(scratch_.begin(), scratch_.end(),
+                       [](const auto& a, const auto& c) { return a.first < c.first; });
+      lay.cells.clear();
+      for (std::size_t e = 0; e < scratch_.size();) {
+        const std::size_t c = scratch_[e].first;
+        double vol = 0;
+        for (; e < scratch_.size() && scratch_[e].first == c; ++e) vol += scratch_[e].second;
+        lay.cells.emplace_back(c, vol);
+      }
+    }
+    for (const auto& [c, vol] : lay.cells) {
       cell_.push_back(c);
       volume_.push_back(vol);
       alpha_[c] += vol / cell_volume;
     }
     body_first_.push_back(cell_.size());
   }
+  // Bodies no longer here (migrated, or no longer a ghost) leave the cache.
+  std::erase_if(cache_, [&](const auto& e) { return e.second.generation != generation_; });
   g.exchange(alpha_);
   solid_momentum(dem);
+}
+
+// The pose a body is laid out at: its position rounded to multiples of layout_step_ and its
+// quaternion's components to multiples of 2^-12, renormalised; exact when layout_step_ is 0. A
+// function of the pose alone, so every rank holding the body lays it out at the same pose.
+SolidPhase::Pose SolidPhase::layout_pose(const Vec3& x, const Quaternion& q) const {
+  if (layout_step_ == 0) return {x.x, x.y, x.z, q.w, q.x, q.y, q.z};
+  auto snap = [&](double v, double step) { return std::nearbyint(v / step) * step; };
+  constexpr double kTurn = 1.0 / 4096;
+  Quaternion r{snap(q.w, kTurn), snap(q.x, kTurn), snap(q.y, kTurn), snap(q.z, kTurn)};
+  const double n = std::sqrt(r.norm2());
+  return {snap(x.x, layout_step_), snap(x.y, layout_step_), snap(x.z, layout_step_), r.w / n, r.x / n, r.y / n,
+          r.z / n};
 }
 
 void SolidPhase::solid_momentum(const DemSolver& dem) {

@@ -21,12 +21,15 @@
 // the tetrahedra and half a cell fit in that reach. Each cell is summed by its one owner rank over
 // the bodies in canonical order, so alpha_s has the same bits on any rank count.
 #pragma once
+#include <array>
 #include <cstdint>
+#include <unordered_map>
 #include <vector>
 
 #include "coupling/tet_clip.hpp"
 #include "fluid/flow_solver.hpp"
 #include "solid/dem_solver.hpp"
+#include "solid/rigid_rotation.hpp"
 
 namespace tessera {
 
@@ -43,7 +46,11 @@ class SolidPhase {
   // Checks that the coupling can run: bodies made of tetrahedra (shape templates), none lighter than
   // kMinDensityRatio times `fluid_density` (the denser fluid's), no periodic flow boundary, and the
   // tetrahedra plus half a cell within the DEM's ghost reach.
-  SolidPhase(const FluidGrid& grid, const DemSolver& dem, double fluid_density);
+  // layout_tolerance (a fraction of the smallest cell side; 0: exact): a body is laid out at its pose
+  // rounded to that step (and its orientation to quaternion components of 2^-12), and its lay-out
+  // is reused while that rounded pose is unchanged: a bed at rest is laid out once. The solid volume
+  // stays exact; the body sits in the grid up to half a step (and about 1e-3 rad) from its pose.
+  SolidPhase(const FluidGrid& grid, const DemSolver& dem, double fluid_density, double layout_tolerance = 0);
   static constexpr double kMinDensityRatio = 0.3;
 
   void update(const DemSolver& dem);
@@ -53,6 +60,9 @@ class SolidPhase {
 
   // Ghosted layout of the grid (owned cells set, ghosts exchanged).
   const std::vector<double>& fraction() const { return alpha_; }
+  using Pose = std::array<double, 7>;  // x, y, z, qw, qx, qy, qz
+  Pose layout_pose(const Vec3& x, const Quaternion& q) const;
+  long layouts_computed() const { return layouts_; }  // this rank, whole run
   SolidPhaseStats stats(const FlowSolver& flow) const;  // collective
 
  private:
@@ -67,6 +77,16 @@ class SolidPhase {
   std::vector<double> loads_;  // 6 per local body (reverse communication); 16 in the exchange
   void solid_momentum(const DemSolver& dem);  // m_s and P_s per cell from the bodies' velocities now
   TetRasterizer raster_;
+  // Lay-outs by body order key, kept while the body's rounded pose is unchanged.
+  struct Layout {
+    Pose pose{};
+    std::vector<std::pair<std::size_t, double>> cells;
+    long generation = 0;
+    bool valid = false;
+  };
+  std::unordered_map<std::int64_t, Layout> cache_;
+  double layout_step_ = 0;
+  long generation_ = 0, layouts_ = 0;
   std::vector<std::pair<std::size_t, double>> scratch_;
 };
 
