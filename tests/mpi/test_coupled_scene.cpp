@@ -26,10 +26,7 @@ namespace fs = std::filesystem;
 namespace {
 
 std::string case_text() {
-  std::ifstream in(std::string(TESSERA_SOURCE_DIR) + "/cases/coupled/grains_into_pool.yaml");
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
+  return test::file_text(std::string(TESSERA_SOURCE_DIR) + "/cases/coupled/grains_into_pool.yaml");
 }
 
 nlohmann::json run_on(int ranks, std::vector<std::string> sets, const std::string& dir,

@@ -4,6 +4,9 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
 
 #include "app/dem_scene.hpp"
 
@@ -84,6 +87,14 @@ long count_differences(const BodyStates& a, const BodyStates& b, const char* wha
     }
   }
   return diff + static_cast<long>(b.size() > a.size() ? b.size() - a.size() : 0);
+}
+
+std::string file_text(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read " + path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
 }
 
 }  // namespace tessera::test

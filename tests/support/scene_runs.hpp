@@ -32,6 +32,9 @@ nlohmann::json run_case_on(int ranks, const std::string& yaml, const std::vector
 BodyStates run_scene_on(int ranks, const std::string& yaml, const std::vector<std::string>& sets,
                         const std::string& output_dir, std::optional<std::string> restart = std::nullopt);
 
+// The text of a file (a shipped case read by a test).
+std::string file_text(const std::string& path);
+
 // Number of bodies whose states differ bitwise (missing bodies count too); prints the first few.
 long count_differences(const BodyStates& a, const BodyStates& b, const char* what);
 

@@ -22,10 +22,7 @@ using namespace tessera;
 namespace {
 
 std::string case_text() {
-  std::ifstream in(std::string(TESSERA_SOURCE_DIR) + "/cases/coupled/settling_sphere.yaml");
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
+  return test::file_text(std::string(TESSERA_SOURCE_DIR) + "/cases/coupled/settling_sphere.yaml");
 }
 
 // The largest downward speed of the sphere in DIR/series.csv (column body_mean_vz).
