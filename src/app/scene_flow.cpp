@@ -160,7 +160,7 @@ class FlowScene final : public SteppedScene {
   void create_bodies();
   void check_bodies(const RunOptions& opt);
   std::string body_series();
-  void write_scene_index(const RunOptions& opt);
+  void write_scene_index();
   void set_initial_state();
   double front_position() const;
   [[noreturn]] void fail(const RunOptions& opt, const std::string& why);
@@ -441,12 +441,12 @@ void FlowScene::write_snapshot() {
   fields_->write(*flow_);
   if (!bodies_out_) return;
   bodies_out_->write(*dem_);
-  write_scene_index(RunOptions{output_dir_, "", {}, true});
+  write_scene_index();
 }
 
 // DIR/scene.xmf: per snapshot a spatial collection of the fields and the bodies (and the grains'
 // surfaces), at the flow's time.
-void FlowScene::write_scene_index(const RunOptions& opt) {
+void FlowScene::write_scene_index() {
   if (flow_->grid().rank() != 0) return;
   std::ostringstream x;
   x.precision(17);
@@ -460,7 +460,7 @@ void FlowScene::write_scene_index(const RunOptions& opt) {
       << bodies_out_->grid_xml(k, "snapshots/", true) << "</Grid>\n";
   }
   x << "</Grid>\n</Domain>\n</Xdmf>\n";
-  write_file_atomically(opt.output_dir + "/scene.xmf", x.str());
+  write_file_atomically(output_dir_ + "/scene.xmf", x.str());
 }
 
 void FlowScene::step(const RunOptions& opt) {
