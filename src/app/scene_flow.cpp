@@ -512,7 +512,8 @@ bool FlowScene::after_step(const RunOptions& opt) {
     if (dem_) bodies = body_series();
     if (flow_->grid().rank() == 0)
       series_ << flow_->time() << ',' << last_.dt << ',' << last_limit_ << ',' << last_.poisson.iterations << ','
-              << last_.poisson.residual << ',' << volume << ',' << ke << ',' << vmax << ',' << front << bodies << '\n';
+              << last_.poisson.residual << ',' << volume << ',' << ke << ',' << vmax << ',' << front << bodies
+              << std::endl;  // flushed: a batch job's series can be followed while it runs
   }
   return false;
 }
