@@ -25,7 +25,7 @@ CoupledSolver::CoupledSolver(FlowSolver& flow, DemSolver& dem, CouplingSettings 
 
 void CoupledSolver::start(bool correct) {
   solid_.update(dem_);
-  if (correct) solid_.correct_velocity(flow_);
+  if (correct) solid_.correct_velocity(flow_, dem_);
 }
 
 int CoupledSolver::substeps_for(double dt) const {
@@ -58,7 +58,7 @@ CoupledStepStats CoupledSolver::step(double dt) {
   {
     auto t = timers_.scope("correction");
     if (settings_.fluid_force) solid_.exchange_momentum(flow_, dem_);
-    solid_.correct_velocity(flow_);
+    solid_.correct_velocity(flow_, dem_);
   }
   return st;
 }

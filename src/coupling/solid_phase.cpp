@@ -61,7 +61,6 @@ void SolidPhase::update(const DemSolver& dem) {
   const double cell_volume = g.cell_volume();
   std::fill(alpha_.begin(), alpha_.end(), 0.0);
   std::fill(solid_mass_.begin(), solid_mass_.end(), 0.0);
-  for (auto& m : solid_momentum_) std::fill(m.begin(), m.end(), 0.0);
   // Canonical order: each cell sums its bodies in the same order on any decomposition (C1).
   body_index_.resize(p.size());
   std::iota(body_index_.begin(), body_index_.end(), std::size_t{0});
@@ -101,17 +100,18 @@ void SolidPhase::update(const DemSolver& dem) {
         lay.cells.emplace_back(c, vol);
       }
     }
+    const double rho = p.mass[b] / t.volume;
     for (const auto& [c, vol] : lay.cells) {
       cell_.push_back(c);
       volume_.push_back(vol);
       alpha_[c] += vol / cell_volume;
+      solid_mass_[c] += rho * vol;
     }
     body_first_.push_back(cell_.size());
   }
   // Bodies no longer here (migrated, or no longer a ghost) leave the cache.
   std::erase_if(cache_, [&](const auto& e) { return e.second.generation != generation_; });
   g.exchange(alpha_);
-  solid_momentum(dem);
 }
 
 // The pose a body is laid out at: its position rounded to multiples of layout_step_ and its
@@ -130,7 +130,6 @@ SolidPhase::Pose SolidPhase::layout_pose(const Vec3& x, const Quaternion& q) con
 void SolidPhase::solid_momentum(const DemSolver& dem) {
   const FluidGrid& g = grid_;
   const ParticleStore& p = dem.particles();
-  std::fill(solid_mass_.begin(), solid_mass_.end(), 0.0);
   for (auto& m : solid_momentum_) std::fill(m.begin(), m.end(), 0.0);
   for (std::size_t n = 0; n < body_index_.size(); ++n) {
     const std::size_t b = body_index_[n];
@@ -141,7 +140,6 @@ void SolidPhase::solid_momentum(const DemSolver& dem) {
       const auto idx = g.index(c);
       const Vec3 u = v + cross(w, g.centre(idx[0], idx[1], idx[2]) - xb);  // rigid motion at the centre
       const double m = rho * volume_[e];
-      solid_mass_[c] += m;
       for (int d = 0; d < 3; ++d) solid_momentum_[d][c] += m * u[d];
     }
   }
@@ -220,7 +218,6 @@ void SolidPhase::exchange_momentum(const FlowSolver& flow, DemSolver& dem) {
     for (int k = 0; k < 3; ++k) p.v[3 * b + k] = x[k], p.omega[3 * b + k] = x[3 + k];
   }
   dem.refresh_ghosts();
-  solid_momentum(dem);
 }
 
 void SolidPhase::fluid_loads(const FlowSolver& flow, DemSolver& dem) {
@@ -253,7 +250,8 @@ void SolidPhase::fluid_loads(const FlowSolver& flow, DemSolver& dem) {
     }
 }
 
-void SolidPhase::correct_velocity(FlowSolver& flow) const {
+void SolidPhase::correct_velocity(FlowSolver& flow, const DemSolver& dem) {
+  solid_momentum(dem);  // from the bodies' velocities now (after the DEM and the exchange)
   const FluidGrid& g = grid_;
   const double cell_volume = g.cell_volume();
   const auto& rho = flow.density();

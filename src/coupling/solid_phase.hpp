@@ -56,7 +56,7 @@ class SolidPhase {
   void update(const DemSolver& dem);
   void fluid_loads(const FlowSolver& flow, DemSolver& dem);
   void exchange_momentum(const FlowSolver& flow, DemSolver& dem);
-  void correct_velocity(FlowSolver& flow) const;
+  void correct_velocity(FlowSolver& flow, const DemSolver& dem);
 
   // Ghosted layout of the grid (owned cells set, ghosts exchanged).
   const std::vector<double>& fraction() const { return alpha_; }
@@ -75,7 +75,7 @@ class SolidPhase {
   std::vector<double> volume_;
   double body_volume_ = 0;  // owned bodies
   std::vector<double> loads_;  // 6 per local body (reverse communication); 16 in the exchange
-  void solid_momentum(const DemSolver& dem);  // m_s and P_s per cell from the bodies' velocities now
+  void solid_momentum(const DemSolver& dem);  // P_s per cell from the bodies' velocities now
   TetRasterizer raster_;
   // Lay-outs by body order key, kept while the body's rounded pose is unchanged.
   struct Layout {

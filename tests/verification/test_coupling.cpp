@@ -284,7 +284,7 @@ TEST(MomentumExchange, FluidAndBodiesKeepTheirMomentum) {
   };
   const Vec3 before = momentum();
   solid.exchange_momentum(flow, *rig.dem);
-  solid.correct_velocity(flow);
+  solid.correct_velocity(flow, *rig.dem);
   const Vec3 after = momentum();
   double body_speed = 0;
   const ParticleStore& b = rig.dem->particles();
