@@ -2,11 +2,12 @@
 """Render a slice of a flow run's fields to PNG: liquid fraction in colour, velocity arrows.
 
 Usage: flow_slice.py RUN_DIR [--axis x|y|z] [--at POSITION_M] [--snapshot N|all] [--out FILE.png]
-       [--arrows 24] [--scale S]
+       [--arrows 24] [--scale S] [--times 0,0.02,0.19]
 RUN_DIR/fields/fields_NNNNN.h5 (written by output.snapshot_interval). The slice is the cell plane
 nearest POSITION_M along AXIS (default: the middle). With --snapshot all, one PNG per snapshot
 (FILE_NNNNN.png) and a strip of up to six of them side by side (FILE), as the drop-impact seed's
-figures 8-12 show the splash in time."""
+figures 8-12 show the splash in time. --times T1,T2,...: the snapshots nearest those times (s), side
+by side. A coupled run's solid fraction (the grains) is drawn in brown under the water."""
 import argparse, glob, os, re, sys
 
 import h5py
@@ -29,7 +30,12 @@ def grid_of(run_dir):
 
 def load(path):
     with h5py.File(path, 'r') as f:
-        return (f.attrs['time'], np.array(f['liquid_fraction']), np.array(f['velocity']))  # (z, y, x[, 3])
+        solid = np.array(f['solid_fraction']) if 'solid_fraction' in f else None
+        return (f.attrs['time'], np.array(f['liquid_fraction']), np.array(f['velocity']), solid)  # (z, y, x[, 3])
+
+
+def plane(a, axis, index):
+    return a[index] if axis == 'z' else a[:, index, :] if axis == 'y' else a[:, :, index]
 
 
 def slice_of(frac, vel, axis, index):
@@ -43,14 +49,22 @@ def slice_of(frac, vel, axis, index):
 
 def draw(ax, run_dir, path, axis, at, arrows, scale):
     origin, h = grid_of(run_dir)
-    t, frac, vel = load(path)
+    t, frac, vel, solid = load(path)
     n = {'x': frac.shape[2], 'y': frac.shape[1], 'z': frac.shape[0]}[axis]
     a = 'xyz'.index(axis)
     index = n // 2 if at is None else int(np.clip((at - origin[a]) / h[a], 0, n - 1))
     f2, u, v, (p, q) = slice_of(frac, vel, axis, index)
     extent = [origin[p], origin[p] + f2.shape[1] * h[p], origin[q], origin[q] + f2.shape[0] * h[q]]
-    ax.imshow(f2, origin='lower', extent=[e * 1e3 for e in extent], cmap='Blues', vmin=0, vmax=1,
-              interpolation='nearest')
+    if solid is not None:  # grains (brown) under the water outside them (blue)
+        s2 = np.clip(plane(solid, axis, index), 0, 1)
+        ax.imshow(np.ma.masked_less(s2, 0.02), origin='lower', extent=[e * 1e3 for e in extent], cmap='copper_r',
+                  vmin=0, vmax=1.2, interpolation='nearest')
+        water = np.ma.masked_less(f2 * (1 - s2), 0.01)
+        ax.imshow(water, origin='lower', extent=[e * 1e3 for e in extent], cmap='Blues', vmin=0, vmax=1,
+                  interpolation='nearest', alpha=0.85)
+    else:
+        ax.imshow(f2, origin='lower', extent=[e * 1e3 for e in extent], cmap='Blues', vmin=0, vmax=1,
+                  interpolation='nearest')
     ax.contour(np.linspace(extent[0], extent[1], f2.shape[1]) * 1e3, np.linspace(extent[2], extent[3], f2.shape[0]) * 1e3,
                f2, levels=[0.5], colors='k', linewidths=0.6)
     sx, sy = max(1, f2.shape[1] // arrows), max(1, f2.shape[0] // arrows)
@@ -73,11 +87,20 @@ def main():
     ap.add_argument('--out', default='slice.png')
     ap.add_argument('--arrows', type=int, default=24)
     ap.add_argument('--scale', type=float, default=None)
+    ap.add_argument('--times', help='comma-separated times (s): the nearest snapshots, side by side')
     args = ap.parse_args()
     files = sorted(glob.glob(os.path.join(args.run_dir, 'fields', 'fields_*.h5')))
     if not files:
         sys.exit('no fields in %s/fields: set output.snapshot_interval' % args.run_dir)
-    if args.snapshot == 'all':
+    if args.times:
+        times = [h5py.File(p, 'r').attrs['time'] for p in files]
+        pick = [files[int(np.argmin([abs(t - float(w)) for t in times]))] for w in args.times.split(',')]
+        fig, axes = plt.subplots(1, len(pick), figsize=(4.2 * len(pick), 3.6))
+        for ax, path in zip(np.atleast_1d(axes), pick):
+            draw(ax, args.run_dir, path, args.axis, args.at, args.arrows, args.scale)
+        fig.tight_layout()
+        fig.savefig(args.out, dpi=110)
+    elif args.snapshot == 'all':
         base, ext = os.path.splitext(args.out)
         for path in files:
             fig, ax = plt.subplots(figsize=(5, 4.5))

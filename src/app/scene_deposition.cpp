@@ -5,6 +5,11 @@
 // data file (DIR/bed.data) for peers. Reports packing fraction and coordination number.
 // Grains are spheres of `diameter`, or bodies of the shape template `shape` (solid.shapes), each
 // turned to a random orientation (uniform over rotations, from the seed and the grain id).
+//
+// The drop-impact seed's boosted fall (section 3.(3)a): with `fall_gravity_factor` F > 1 the grains
+// fall under F times gravity until the highest grain meets the bed (its downward speed falls below
+// half the free-fall speed F g t it would have), then gravity returns to its value and the bed runs
+// `after_landing` longer; that ends the run (no energy criterion).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -90,7 +95,15 @@ class DepositionScene final : public DemScene {
       d.fail("region_max", "a region holding fewer than 2^32 grains");
     // The first max_grains lattice sites (x fastest, then y, then z), if set.
     max_grains_ = d.integer("max_grains", 1, kMaxBodyId, kMaxBodyId);
-    settle_ = SettleCriterion(d, true);
+    fall_factor_ = d.real("fall_gravity_factor", Dim::none, Range{1.0, 100.0, true, true}, 1.0);
+    if (fall_factor_ > 1) {
+      after_landing_ = d.real("after_landing", Dim::time, Range::positive());
+      if (d.has("settled_kinetic_energy"))
+        d.fail("settled_kinetic_energy", "absent with fall_gravity_factor: the run ends after_landing after the landing");
+      gravity_ = dem_->gravity();
+      if (!(norm(gravity_) > 0)) d.fail("fall_gravity_factor", "used with a non-zero solid.gravity");
+    }
+    settle_ = SettleCriterion(d, fall_factor_ == 1);
     if (!end_time_) root.section("run").fail("end_time", "is required: the longest the deposition may take");
     require_pairs({material_});
   }
@@ -118,14 +131,36 @@ class DepositionScene final : public DemScene {
                                                      b * std::sin(pi2 * u3), b * std::cos(pi2 * u3)};
           dem_->add_body(id, material_, shape_, x, q, {});
         }
+    boost_gravity();
   }
 
-  bool finished(const DemStats& s) override { return settle_.check(s, dem_->time()); }
+  // Before the landing, the fall's boosted gravity.
+  void boost_gravity() {
+    if (fall_factor_ > 1 && landing_time_ < 0) dem_->set_gravity(gravity_ * fall_factor_);
+  }
 
-  void restore(const CheckpointExtras& e) override { settle_.restore(e); }
+  bool finished(const DemStats& s) override {
+    const double t = dem_->time();
+    track_mean_speed();
+    if (fall_factor_ == 1) return settle_.check(s, t);
+    if (landing_time_ < 0 && top_grain_landed(t)) {
+      landing_time_ = t;
+      dem_->set_gravity(gravity_);
+    }
+    return landing_time_ >= 0 && t >= landing_time_ + after_landing_ * (1 - 1e-9);
+  }
+
+  void restore(const CheckpointExtras& e) override {
+    settle_.restore(e);
+    if (auto it = e.find("landing_time"); it != e.end()) landing_time_ = it->second;
+    if (auto it = e.find("peak_mean_speed"); it != e.end()) peak_mean_speed_ = it->second;
+    boost_gravity();
+  }
   CheckpointExtras extras() const override {
     CheckpointExtras e;
     settle_.save(e);
+    e["landing_time"] = landing_time_;
+    e["peak_mean_speed"] = peak_mean_speed_;
     return e;
   }
 
@@ -172,7 +207,16 @@ class DepositionScene final : public DemScene {
       q["grain_envelope_gap"] = t.envelope.gap;
       q["grain_envelope_overshoot"] = t.envelope.overshoot;
     }
-    settle_.report(q, dem_->time());
+    if (fall_factor_ > 1) {
+      q["landing_time"] = landing_time_;  // -1: the top grain had not met the bed
+      q["fall_gravity_factor"] = fall_factor_;
+    } else {
+      settle_.report(q, dem_->time());
+    }
+    // The seed's measure of rest: the mean speed now against its largest value at the checks.
+    q["mean_speed"] = mean_speed_;
+    q["peak_mean_speed"] = peak_mean_speed_;
+    q["mean_speed_over_peak"] = peak_mean_speed_ > 0 ? mean_speed_ / peak_mean_speed_ : 0.0;
     // Floor reaction over the bed's weight: 1 for a hydrostatic bed, below 1 with wall friction (Janssen).
     double floor = 0;
     const auto& prims = dem_->walls().primitives();
@@ -183,6 +227,37 @@ class DepositionScene final : public DemScene {
   }
 
  private:
+  // Collective: mean |v| over the bodies (an exact sum: the same on any rank count) and its peak.
+  void track_mean_speed() {
+    const ParticleStore& p = dem_->particles();
+    ExactSum sums[2];
+    for (std::size_t i = 0; i < p.owned; ++i) sums[0] += norm(p.vel(i)), sums[1] += 1.0;
+    ExactSum::all_reduce(sums, decomp_->comm());
+    mean_speed_ = sums[1].value() > 0 ? sums[0].value() / sums[1].value() : 0.0;
+    peak_mean_speed_ = std::max(peak_mean_speed_, mean_speed_);
+  }
+
+  // Collective: the highest grain (largest centre height; ties to the lower id) moves down at less
+  // than half the free-fall speed F g t: something below has stopped it.
+  bool top_grain_landed(double t) const {
+    const ParticleStore& p = dem_->particles();
+    struct {
+      double z;
+      int rank;
+    } local{-1e300, decomp_->rank()}, top;
+    std::size_t best = 0;
+    for (std::size_t i = 0; i < p.owned; ++i)
+      if (p.x[3 * i + 2] > local.z || (p.x[3 * i + 2] == local.z && p.id[i] < p.id[best])) local.z = p.x[3 * i + 2], best = i;
+    MPI_Allreduce(&local, &top, 1, MPI_DOUBLE_INT, MPI_MAXLOC, decomp_->comm());
+    double down = 0;  // speed along gravity of the top grain
+    if (top.rank == decomp_->rank()) down = dot(p.vel(best), gravity_) / norm(gravity_);
+    MPI_Bcast(&down, 1, MPI_DOUBLE, top.rank, decomp_->comm());
+    return down < 0.5 * fall_factor_ * norm(gravity_) * t;
+  }
+
+  double fall_factor_ = 1, after_landing_ = 0, landing_time_ = -1;
+  double mean_speed_ = 0, peak_mean_speed_ = 0;
+  Vec3 gravity_;
   int material_ = 0, shape_ = 0;
   Vec3 spacing_;
   bool aligned_ = false;

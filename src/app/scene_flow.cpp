@@ -7,7 +7,9 @@
 // one by one) and coupling (substeps, fluid_force); each step is CoupledSolver::step. It also
 // writes DIR/snapshots (bodies, grain surfaces), the solid fraction with the fields, DIR/scene.xmf
 // (fields and bodies in one time series, ParaView) and DIR/checkpoint_bodies.h5 beside
-// DIR/checkpoint.h5.
+// DIR/checkpoint.h5. With sections drop and crater it is the drop-impact scene (app/drop_impact.hpp):
+// the drop placed over the bed, the crater measured at every snapshot and at the end; with
+// bodies.settled_kinetic_energy the run ends once the bodies are at rest.
 //
 // Writes DIR/summary.json (quantities, timers, Poisson statistics, dt limits), DIR/series.csv
 // (one row per series_interval: time, dt and its limit, Poisson iterations and residual, liquid
@@ -18,10 +20,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <sstream>
 
+#include "app/dem_scene.hpp"
+#include "app/drop_impact.hpp"
 #include "app/run_loop.hpp"
 #include "app/scenes.hpp"
 #include "core/errors.hpp"
@@ -158,7 +163,7 @@ class FlowScene final : public SteppedScene {
  private:
   void read_bodies(const ConfigNode& root, const std::string& case_dir);
   void create_bodies();
-  void check_bodies(const RunOptions& opt);
+  bool check_bodies(const RunOptions& opt);
   std::string body_series();
   void write_scene_index();
   void set_initial_state();
@@ -177,8 +182,10 @@ class FlowScene final : public SteppedScene {
   void write_snapshot() override;
   void write_checkpoint(const std::string& path) override {
     write_flow_checkpoint(path, *flow_);
-    if (dem_) tessera::write_checkpoint(bodies_path(path), *dem_);
+    if (dem_) tessera::write_checkpoint(bodies_path(path), *dem_, body_extras());
   }
+  CheckpointExtras body_extras() const;
+  void restore_body_extras(const CheckpointExtras& e);
   std::string progress() override;
   void end_output(const RunOptions& opt) override;
   void summarise(nlohmann::json& s) override;
@@ -212,7 +219,29 @@ class FlowScene final : public SteppedScene {
   int last_substeps_ = 0;
   double free_liquid0_ = 0;  // liquid outside the bodies at the start of this run
   long substeps_total_ = 0;
+  SettleCriterion rest_;  // bodies.settled_kinetic_energy: the run ends when the bodies are at rest
+  // The drop-impact scene (sections drop and crater).
+  std::optional<DropOnBed> drop_;
+  std::optional<CraterMonitor> crater_;
+  double porosity0_ = 0;  // the bed's porosity at the start
+  bool resuming_ = false;  // the first snapshot of a restarted run
 };
+
+CheckpointExtras FlowScene::body_extras() const {
+  CheckpointExtras e;
+  rest_.save(e);
+  if (drop_) drop_->save(e);
+  e["bed_porosity_start"] = porosity0_;
+  if (crater_) e["crater_volume_start"] = crater_->start_volume();
+  return e;
+}
+
+void FlowScene::restore_body_extras(const CheckpointExtras& e) {
+  rest_.restore(e);
+  if (drop_) drop_->restore(e);
+  if (auto it = e.find("bed_porosity_start"); it != e.end()) porosity0_ = it->second;
+  if (auto it = e.find("crater_volume_start"); crater_ && it != e.end()) crater_->set_start_volume(it->second);
+}
 
 void FlowScene::read_bodies(const ConfigNode& root, const std::string& case_dir) {
   const ConfigNode solid = root.section("solid");
@@ -260,6 +289,13 @@ void FlowScene::read_bodies(const ConfigNode& root, const std::string& case_dir)
     }
     if (body_list_.empty()) b.fail("list", "at least one body");
   }
+  rest_ = SettleCriterion(b, false);
+  const Vec3 lo = decomp_->global_lo(), hi = decomp_->global_hi();
+  if (const auto d = root.optional_section("drop")) drop_.emplace(*d, lo, hi, flow_->settings().liquid.density);
+  if (const auto c = root.optional_section("crater")) {
+    const double cx = drop_ ? drop_->axis_x() : 0.5 * (lo.x + hi.x), cy = drop_ ? drop_->axis_y() : 0.5 * (lo.y + hi.y);
+    crater_.emplace(*c, lo, hi, cx, cy);
+  }
   const ConfigNode run = root.section("run");
   check_interval_ = run.real("check_interval", Dim::time, Range::positive(), 1e-4);
   max_overlap_ratio_ = run.real("max_overlap_ratio", Dim::none, Range{0.0, 2.0, true, false}, max_overlap_ratio_);
@@ -294,11 +330,22 @@ std::string FlowScene::body_series() {
   return o.str();
 }
 
-// Every run.check_interval: the bodies' state is finite and no overlap exceeds the bound.
-void FlowScene::check_bodies(const RunOptions& opt) {
-  if (!checks_.due(flow_->time(), flow_->last_dt())) return;
+// Every run.check_interval: the bodies' state is finite, every body is in the box and no overlap
+// exceeds the bound; true once the bodies are at rest (bodies.settled_kinetic_energy).
+bool FlowScene::check_bodies(const RunOptions& opt) {
+  if (!checks_.due(flow_->time(), flow_->last_dt())) return false;
   const DemStats s = dem_->stats();
-  if (s.finite && s.max_overlap_ratio <= max_overlap_ratio_) return;
+  const ParticleStore& p = dem_->particles();
+  const Vec3 lo = decomp_->global_lo(), hi = decomp_->global_hi();
+  std::int64_t outside = std::numeric_limits<std::int64_t>::max();  // lowest id of a body out of the box
+  for (std::size_t i = 0; i < p.owned; ++i) {
+    const Vec3 x = p.pos(i);
+    if (x.x < lo.x || x.x > hi.x || x.y < lo.y || x.y > hi.y || x.z < lo.z || x.z > hi.z) outside = std::min(outside, p.id[i]);
+  }
+  MPI_Allreduce(MPI_IN_PLACE, &outside, 1, MPI_INT64_T, MPI_MIN, decomp_->comm());
+  if (outside != std::numeric_limits<std::int64_t>::max())
+    fail(opt, "body " + std::to_string(outside) + " left the box (a wall it passed through, or a blow-up)");
+  if (s.finite && s.max_overlap_ratio <= max_overlap_ratio_) return rest_.check(s, flow_->time());
   std::ostringstream m;
   if (!s.finite)
     m << "non-finite body positions or velocities";
@@ -377,10 +424,18 @@ void FlowScene::start(const RunOptions& opt) {
   if (opt.restart) read_flow_checkpoint(*opt.restart, *flow_);
   if (!dem_) return;
   if (opt.restart) {
-    read_checkpoint(bodies_path(*opt.restart), *dem_);
+    restore_body_extras(read_checkpoint(bodies_path(*opt.restart), *dem_));
     dem_->setup(false);
   } else {
     create_bodies();
+    if (drop_) {
+      const DropShape d = drop_->place(*dem_);
+      LiquidShape s;
+      s.kind = LiquidShape::Kind::ellipsoid;
+      s.a = d.centre, s.b = d.semi_axes, s.velocity = d.velocity;
+      shapes_.push_back(s);
+    }
+    if (crater_) porosity0_ = crater_->porosity(*dem_);
   }
   coupled_ = std::make_unique<CoupledSolver>(*flow_, *dem_, coupling_);
 }
@@ -412,6 +467,9 @@ void FlowScene::begin_output(const RunOptions& opt) {
       std::printf("  bodies: %ld, DEM stable step %.4g s, sub-steps %s\n", bodies,
                   coupled_->dem_stable_dt(),
                   coupling_.substeps ? std::to_string(*coupling_.substeps).c_str() : "from each flow step's dt");
+    if (drop_)
+      std::printf("  drop: centre %.4g m above the floor, %.4g m above the bed's top\n", shapes_.back().a.z,
+                  shapes_.back().a.z - drop_->bed_top_height());
     if (!deprecated_.empty()) std::printf("  warning: %s\n", deprecated_.c_str());
     std::fflush(stdout);
   }
@@ -431,9 +489,17 @@ void FlowScene::begin_output(const RunOptions& opt) {
   if (coupled_) {
     fields_->add_field("solid_fraction", &coupled_->solid().fraction());
     bodies_out_ = std::make_unique<SnapshotSeries>(opt.output_dir + "/snapshots");
+    if (crater_)
+      crater_->open(opt.output_dir, opt.restart.has_value() && fs::exists(opt.output_dir + "/crater.csv"), root);
     checks_ = Schedule(check_interval_, flow_->time());
   }
-  if (snapshot_interval_ > 0) write_snapshot();
+  if (snapshot_interval_ > 0) {
+    resuming_ = opt.restart.has_value();  // the crater at this time is the stopped run's last row
+    write_snapshot();
+    resuming_ = false;
+  } else if (crater_ && !opt.restart) {
+    crater_->sample(*dem_, flow_->time());  // the bed before the drop
+  }
   next_series_ = flow_->time();
 }
 
@@ -442,6 +508,7 @@ void FlowScene::write_snapshot() {
   if (!bodies_out_) return;
   bodies_out_->write(*dem_);
   write_scene_index();
+  if (crater_ && !resuming_) crater_->sample(*dem_, flow_->time());
 }
 
 // DIR/scene.xmf: per snapshot a spatial collection of the fields and the bodies (and the grains'
@@ -496,10 +563,10 @@ void FlowScene::step(const RunOptions& opt) {
 }
 
 bool FlowScene::after_step(const RunOptions& opt) {
-  if (dem_) check_bodies(opt);
+  const bool at_rest = dem_ && check_bodies(opt);
   const double end = end_time_.value_or(0.0);
   const bool sample = flow_->time() >= next_series_ - 1e-12 * end;
-  if (!sample && flow_->steps() % 20 != 0) return false;
+  if (!sample && flow_->steps() % 20 != 0) return at_rest;
   const double vmax = flow_->max_speed();
   if (!std::isfinite(vmax) || vmax > max_speed_)
     fail(opt, "maximum speed " + std::to_string(vmax) + " m/s exceeds run.max_speed (" + std::to_string(max_speed_) +
@@ -515,7 +582,7 @@ bool FlowScene::after_step(const RunOptions& opt) {
               << last_.poisson.residual << ',' << volume << ',' << ke << ',' << vmax << ',' << front << bodies
               << std::endl;  // flushed: a batch job's series can be followed while it runs
   }
-  return false;
+  return at_rest;
 }
 
 std::string FlowScene::progress() {
@@ -581,6 +648,9 @@ void FlowScene::summarise(nlohmann::json& s) {
   s["coupling"] = {{"dem_stable_dt", coupled_->dem_stable_dt()},
                    {"substeps_per_flow_step", steps_run ? double(substeps_total_) / steps_run : 0.0},
                    {"fluid_force", coupling_.fluid_force}};
+  if (rest_.enabled()) rest_.report(s["quantities"], flow_->time());
+  if (drop_) drop_->report(s["quantities"]);
+  if (crater_) crater_->finish(*dem_, s["quantities"], porosity0_);
   s["output"]["checkpoint_bodies"] = "checkpoint_bodies.h5";
   s["output"]["scene"] = fields_->count() ? "scene.xmf" : "";
   s["output"]["bodies"] = bodies_out_->count() ? "snapshots/particles.xmf" : "";

@@ -50,6 +50,11 @@ void DemSolver::set_dt(double dt) {
   dt_ = dt;
 }
 
+void DemSolver::set_gravity(const Vec3& g) {
+  apply_pending_kick();  // its half-kick saw the old gravity
+  settings_.gravity = g;
+}
+
 void DemSolver::advance(double dt, int substeps) {
   if (substeps < 1) throw RunError("DemSolver::advance: at least one sub-step, not " + std::to_string(substeps));
   if (dt != dt_) set_dt(dt);

@@ -147,6 +147,9 @@ class DemSolver {
   void set_clock(double time, long steps) { time_ = time, steps_ = steps; }
   double skin() const { return skin_; }
   const Vec3& gravity() const { return settings_.gravity; }
+  // Changes gravity from the next step on (a deposition's boosted fall); applies a pending half-kick
+  // first (it belongs to the old gravity).
+  void set_gravity(const Vec3& g);
   bool plane_mode() const { return settings_.plane_normal >= 0; }
   int plane_normal() const { return settings_.plane_normal; }
   double plane_thickness() const { return settings_.plane_thickness; }
