@@ -117,12 +117,15 @@ def remeasure(run, settings, start, mpirun):
     tag = '_'.join('%s%g' % (k[0], v) for k, v in sorted(settings.items()))
     out = os.path.join(run, 'crater_study', ('start_' if start else '') + tag)
     sets = ['--set', 'output.snapshot_interval=0', '--set', 'output.progress_interval=1000']
+    summary = json.load(open(os.path.join(run, 'summary.json')))
+    if 'bodies_file' in summary:  # relative in the case file, which now lies elsewhere
+        sets += ['--set', 'bodies.file=' + summary['bodies_file']]
     sets += sum((['--set', 'crater.%s=%r' % (k, v)] for k, v in settings.items()), [])
     if start:  # one flow step from the bed (the drop has not reached it)
         cmd = mpirun + [os.path.join(ROOT, 'build', 'bin', 'tessera'), 'run', resolved, '--quiet', '--output', out,
                         '--set', 'run.max_steps=1'] + sets
     else:
-        steps = json.load(open(os.path.join(run, 'summary.json')))['steps']
+        steps = summary['steps']
         cmd = mpirun + [os.path.join(ROOT, 'build', 'bin', 'tessera'), 'run', resolved, '--quiet', '--output', out,
                         '--restart', os.path.join(run, 'checkpoint.h5'), '--set', 'run.max_steps=%d' % steps] + sets
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "app/drop_impact.hpp"
 
+#include <mpi.h>
+
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -58,7 +60,7 @@ void DropOnBed::report(nlohmann::json& q) const {
 }
 
 CraterMonitor::CraterMonitor(const ConfigNode& crater, const Vec3& box_lo, const Vec3& box_hi, double axis_x,
-                             double axis_y)
+                             double axis_y, double grain_length)
     : lo_(box_lo), hi_(box_hi) {
   s_.cx = axis_x;
   s_.cy = axis_y;
@@ -72,6 +74,7 @@ CraterMonitor::CraterMonitor(const ConfigNode& crater, const Vec3& box_lo, const
                                   std::to_string(wall - 0.5 * s_.cell) + " m)");
   if (s_.max_radius < 2 * s_.ring_width) crater.fail("max_radius", "at least two ring widths");
   porosity_height_ = crater.real("porosity_height", Dim::length, Range::positive(), 5e-3);
+  ejection_distance_ = crater.real("ejection_distance", Dim::length, Range::positive(), grain_length);
   if (porosity_height_ > box_hi.z - box_lo.z) crater.fail("porosity_height", "at most the box's height");
 }
 
@@ -118,6 +121,15 @@ void CraterMonitor::finish(const DemSolver& dem, nlohmann::json& q, double poros
   q["bed_porosity"] = porosity(dem);
   q["bed_porosity_start"] = porosity_start;
   q["porosity_height"] = porosity_height_;
+  if (!start_.empty()) {
+    const ParticleStore& p = dem.particles();
+    long moved = 0;
+    for (std::size_t i = 0; i < p.owned; ++i)
+      if (auto it = start_.find(p.id[i]); it != start_.end() && norm(p.pos(i) - it->second) > ejection_distance_) ++moved;
+    MPI_Allreduce(MPI_IN_PLACE, &moved, 1, MPI_LONG, MPI_SUM, dem.decomposition().comm());
+    q["displaced_grains"] = moved;
+    q["ejection_distance"] = ejection_distance_;
+  }
   if (dem.decomposition().rank() != 0) return;
   std::ostringstream rings;
   rings.precision(10);

@@ -11,7 +11,9 @@
 //            porosity is reported below it. Measured at every snapshot (DIR/crater.csv) and at the
 //            end (summary.json, DIR/crater_rings.csv, DIR/crater_surface.csv).
 #pragma once
+#include <cstdint>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -54,7 +56,9 @@ class DropOnBed {
 
 class CraterMonitor {
  public:
-  CraterMonitor(const ConfigNode& crater, const Vec3& box_lo, const Vec3& box_hi, double axis_x, double axis_y);
+  // grain_length: the default ejection_distance.
+  CraterMonitor(const ConfigNode& crater, const Vec3& box_lo, const Vec3& box_hi, double axis_x, double axis_y,
+                double grain_length);
   // Collective: porosity below porosity_height (exact tetrahedron clipping).
   double porosity(const DemSolver& dem) const;
   // Collective: the crater now; rank 0 appends a row to DIR/crater.csv.
@@ -62,6 +66,10 @@ class CraterMonitor {
   // Collective: the crater at the end into quantities; rank 0 writes the ring profile and surface.
   void finish(const DemSolver& dem, nlohmann::json& q, double porosity_start);
   void open(const std::string& dir, bool append, bool root);
+  // Where the bodies started (the bed file), for the count of grains that end more than
+  // ejection_distance from there (`displaced_grains`: the ejected grains and those the crater's
+  // wall let slide); empty: no count.
+  void set_start_positions(std::map<std::int64_t, Vec3> x) { start_ = std::move(x); }
   // The first sample's volume (the bed before the drop: the method's reading of a rough surface).
   double start_volume() const { return start_volume_; }
   void set_start_volume(double v) { start_volume_ = v; }
@@ -69,7 +77,8 @@ class CraterMonitor {
  private:
   CraterSettings s_;
   Vec3 lo_, hi_;
-  double porosity_height_ = 0, start_volume_ = -1;
+  double porosity_height_ = 0, start_volume_ = -1, ejection_distance_ = 0;
+  std::map<std::int64_t, Vec3> start_;
   std::string dir_;
   std::ofstream csv_;
 };

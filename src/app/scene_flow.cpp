@@ -294,7 +294,10 @@ void FlowScene::read_bodies(const ConfigNode& root, const std::string& case_dir)
   if (const auto d = root.optional_section("drop")) drop_.emplace(*d, lo, hi, flow_->settings().liquid.density);
   if (const auto c = root.optional_section("crater")) {
     const double cx = drop_ ? drop_->axis_x() : 0.5 * (lo.x + hi.x), cy = drop_ ? drop_->axis_y() : 0.5 * (lo.y + hi.y);
-    crater_.emplace(*c, lo, hi, cx, cy);
+    double length = 0;  // the longest template: the default ejection distance
+    for (const ShapeTemplate& t : dem_->shapes()) length = std::max(length, 2 * t.bounding_radius);
+    crater_.emplace(*c, lo, hi, cx, cy, length);
+    if (!bodies_file_.empty()) crater_->set_start_positions(read_checkpoint_positions(bodies_file_));
   }
   const ConfigNode run = root.section("run");
   check_interval_ = run.real("check_interval", Dim::time, Range::positive(), 1e-4);
@@ -651,6 +654,7 @@ void FlowScene::summarise(nlohmann::json& s) {
   if (rest_.enabled()) rest_.report(s["quantities"], flow_->time());
   if (drop_) drop_->report(s["quantities"]);
   if (crater_) crater_->finish(*dem_, s["quantities"], porosity0_);
+  if (!bodies_file_.empty()) s["bodies_file"] = fs::absolute(bodies_file_).string();
   s["output"]["checkpoint_bodies"] = "checkpoint_bodies.h5";
   s["output"]["scene"] = fields_->count() ? "scene.xmf" : "";
   s["output"]["bodies"] = bodies_out_->count() ? "snapshots/particles.xmf" : "";

@@ -304,6 +304,16 @@ CheckpointExtras read_checkpoint(const std::string& path, DemSolver& dem) {
   return extras;
 }
 
+std::map<std::int64_t, Vec3> read_checkpoint_positions(const std::string& path) {
+  H5File f = H5File::open_read(path, MPI_COMM_SELF);
+  int cols = 0;
+  const auto state = f.read_all<double>("bodies", cols);
+  std::map<std::int64_t, Vec3> x;
+  for (std::size_t off = 0; off + 8 < state.size(); off += static_cast<std::size_t>(cols))
+    x[static_cast<std::int64_t>(state[off])] = {state[off + 6], state[off + 7], state[off + 8]};  // ParticleStore::pack
+  return x;
+}
+
 void write_lammps_data(const std::string& path, const DemSolver& dem) {
   MPI_Comm comm = dem.decomposition().comm();
   const ParticleStore& p = dem.particles();

@@ -45,6 +45,9 @@ void write_checkpoint(const std::string& path, DemSolver& dem, const CheckpointE
 // Call before dem.setup(false).
 CheckpointExtras read_checkpoint(const std::string& path, DemSolver& dem);
 
+// Every body's position in a checkpoint, by id (each caller reads the file; not collective).
+std::map<std::int64_t, Vec3> read_checkpoint_positions(const std::string& path);
+
 // Collective: gathers on rank 0, writes bodies sorted by id. Types are material index + 1.
 // Shaped bodies are written as their contact spheres (molecule id = body id, mass split evenly) with
 // a Molecules section, for LAMMPS fix property/atom mol + fix rigid/small.

@@ -10,7 +10,9 @@
 //  - the crater quantities and files exist; 1 and 2 ranks agree (the bed bit for bit, the crater
 //    after the flow steps to the pressure solver's tolerance); a restart continues crater.csv and
 //    ends bit for bit where the straight run ends;
-//  - a drop that would start in the bed is refused at set-up, naming the key.
+//  - a drop that would start in the bed is refused at set-up, naming the key;
+//  - the bed's boosted fall (theory D0): before any grain touches, the mean speed is 4 g t; the run
+//    ends after_landing after the top grain's landing.
 #include <gtest/gtest.h>
 #include <mpi.h>
 
@@ -91,6 +93,9 @@ TEST(DropOnSand, PlacesTheDropAndMeasuresTheBed) {
   for (const char* k : {"crater_volume", "crater_volume_start", "crater_depth", "crater_rim_radius",
                         "crater_section_volume", "bed_porosity"})
     EXPECT_TRUE(q.contains(k)) << k;
+  // Six flow steps move no grain by a grain's length.
+  EXPECT_EQ(q["displaced_grains"].get<long>(), 0);
+  EXPECT_NEAR(q["ejection_distance"].get<double>(), 2 * 1.27e-3, 0.05e-3);  // the grain's length
   for (const char* f : {"crater.csv", "crater_rings.csv", "crater_surface.csv"})
     EXPECT_TRUE(fs::exists(kDir + "/two/" + f)) << f;
 }
@@ -135,4 +140,28 @@ TEST(DropOnSand, RefusesADropInTheBed) {
         }
       },
       InputError);
+}
+
+TEST(DropOnSand, BedFallsAtFourGUntilTheTopGrainLands) {
+  const std::vector<std::string> common = {"deposition.max_grains=200", "output.snapshot_interval=0",
+                                           "output.progress_interval=1000"};
+  // In 0.4 ms at 4 g a grain falls 3.1 um: no grain reaches the floor (the lowest bottom starts at
+  // least 1.295 - 0.02 - 1.27 mm = 5 um above it) or another (the lattice's gaps are fixed while all
+  // fall alike): all fall freely at 4 g.
+  auto early = common;
+  early.insert(early.end(), {"run.end_time=0.4 ms", "run.check_interval=0.4 ms"});
+  const auto a = test::run_case_on(world_size(), cases("bed_small.yaml"), early, kDir + "/fall_early");
+  auto full = common;
+  full.push_back("deposition.after_landing=1 ms");
+  const auto b = test::run_case_on(world_size(), cases("bed_small.yaml"), full, kDir + "/fall_full");
+  if (world_rank() != 0) return;
+  const double g = 9.8, t = a["time"].get<double>();
+  EXPECT_NEAR(a["quantities"]["mean_speed"].get<double>(), 4 * g * t, 1e-9 * g * t);
+  EXPECT_LT(a["quantities"]["landing_time"].get<double>(), 0);  // not yet
+  const double landing = b["quantities"]["landing_time"].get<double>();
+  EXPECT_GT(landing, 0.5e-3);
+  EXPECT_EQ(b["status"], "completed");
+  EXPECT_NEAR(b["time"].get<double>(), landing + 1e-3, 0.5e-3);  // checked every run.check_interval
+  std::printf("  mean speed at %.2g ms %.6g m/s (4 g t = %.6g); landing at %.4g s\n", t * 1e3,
+              a["quantities"]["mean_speed"].get<double>(), 4 * g * t, landing);
 }
