@@ -13,7 +13,8 @@ Usage: crater.py RUN_DIR [--out FILE.png]
            width (dr) and surface layer, by restarting tessera from RUN_DIR/checkpoint.h5 with no step
            (the one implementation, src/analysis/bed_surface.cpp); prints a table and writes
            RUN_DIR/crater_study.json. With --start, the state at t = 0 instead (the bed before the
-           drop: the method's reading of an undisturbed, rough surface).
+           drop: the method's reading of an undisturbed, rough surface). --case FILE restarts with that
+           case file instead of RUN_DIR/case.resolved.yaml (with the run's own overrides as --set).
 """
 import argparse, csv, itertools, json, math, os, subprocess, sys
 
@@ -111,9 +112,9 @@ def figure(run, q, out):
     print('wrote', out)
 
 
-def remeasure(run, settings, start, mpirun):
+def remeasure(run, settings, start, mpirun, case=None):
     """The crater of the run's last state (or its start) with other settings: a restart with no step."""
-    resolved = os.path.join(run, 'case.resolved.yaml')
+    resolved = case or os.path.join(run, 'case.resolved.yaml')
     tag = '_'.join('%s%g' % (k[0], v) for k, v in sorted(settings.items()))
     out = os.path.join(run, 'crater_study', ('start_' if start else '') + tag)
     sets = ['--set', 'output.snapshot_interval=0', '--set', 'output.progress_interval=1000']
@@ -142,6 +143,7 @@ def main():
     ap.add_argument('--rings', default='')
     ap.add_argument('--layers', default='')
     ap.add_argument('--ranks', type=int, default=1)
+    ap.add_argument('--case', help='the case file to restart with (default RUN_DIR/case.resolved.yaml)')
     args = ap.parse_args()
     if not args.study:
         q = report(args.run_dir)
@@ -154,7 +156,7 @@ def main():
     print('%10s %10s %10s %12s %12s %9s %9s' % ('cell mm', 'dr mm', 'layer mm', 'V14 mm^3', 'V13 mm^3', 'L mm', 'H mm'))
     for cell, dr, layer in itertools.product(lists(args.cells, base['cell']), lists(args.rings, base['ring_width']),
                                              lists(args.layers, base['surface_layer'])):
-        q = remeasure(args.run_dir, {'cell': cell, 'ring_width': dr, 'surface_layer': layer}, args.start, mpirun)
+        q = remeasure(args.run_dir, {'cell': cell, 'ring_width': dr, 'surface_layer': layer}, args.start, mpirun, args.case)
         rows.append({'cell': cell, 'ring_width': dr, 'surface_layer': layer, 'crater_volume': q['crater_volume'],
                      'crater_section_volume': q['crater_section_volume'], 'crater_rim_radius': q['crater_rim_radius'],
                      'crater_depth': q['crater_depth']})

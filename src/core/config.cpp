@@ -237,6 +237,10 @@ std::vector<long> ConfigNode::integers(const std::string& key, std::size_t count
     }
     if (v.back() < lo || v.back() > hi) throw InputError(key_path(key), show(n), allowed);
   }
+  YAML::Node o(YAML::NodeType::Sequence);  // into the resolved case, which must run again as it is
+  o.SetStyle(YAML::EmitterStyle::Flow);
+  for (long x : v) o.push_back(x);
+  out_[key] = o;
   return v;
 }
 
@@ -250,6 +254,10 @@ std::vector<std::string> ConfigNode::texts(const std::string& key) const {
     if (!item.IsScalar()) throw InputError(key_path(key), show(n), "a list of strings");
     v.push_back(item.Scalar());
   }
+  YAML::Node o(YAML::NodeType::Sequence);
+  o.SetStyle(YAML::EmitterStyle::Flow);
+  for (const auto& x : v) o.push_back(x);
+  out_[key] = o;
   return v;
 }
 
