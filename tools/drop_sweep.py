@@ -109,6 +109,13 @@ python3 tools/drop_sweep.py run --set-of {args.set_of} --case {os.path.abspath(a
     print('wrote', path, '(sbatch it);', len(names), 'runs')
 
 
+def first_volume(run_dir):
+    """The crater measure of the bed before the drop: crater.csv's first row (t = 0)."""
+    with open(os.path.join(run_dir, 'crater.csv')) as f:
+        f.readline()
+        return float(f.readline().split(',')[1])
+
+
 def collect(out):
     rows = {}
     for path in sorted(glob.glob(os.path.join(out, '*', 'summary.json'))):
@@ -119,7 +126,7 @@ def collect(out):
         rows[os.path.basename(os.path.dirname(path))] = dict(
             aspect=q['drop_horizontal_diameter'] / q['drop_vertical_diameter'], v=q['drop_velocity'],
             mv=q['drop_momentum'] * 1e5, V=q['crater_volume'] * 1e9, V13=q['crater_section_volume'] * 1e9,
-            V0=q['crater_volume_start'] * 1e9, L=q['crater_rim_radius'] * 1e3, H=q['crater_depth'] * 1e3,
+            V0=first_volume(os.path.dirname(path)) * 1e9, L=q['crater_rim_radius'] * 1e3, H=q['crater_depth'] * 1e3,
             moved=q.get('displaced_grains', -1), t=s['time'], wall=s['wall_seconds'], status=s['status'])
     if not rows:
         sys.exit('no finished runs under ' + out)

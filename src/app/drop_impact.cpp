@@ -95,7 +95,7 @@ void CraterMonitor::open(const std::string& dir, bool append, bool root) {
 
 void CraterMonitor::sample(const DemSolver& dem, double time) {
   const Crater c = measure_crater(grain_tops(dem), s_);
-  if (start_volume_ < 0) start_volume_ = c.volume;
+  if (!start_volume_) start_volume_ = c.volume;
   if (!csv_.is_open()) return;
   csv_ << time << ',' << c.volume << ',' << c.depth << ',' << c.rim_radius << ',' << c.a << ',' << c.b << ','
        << c.section_volume << ',' << c.section_x.length << ',' << c.section_y.length << ','
@@ -106,7 +106,7 @@ void CraterMonitor::finish(const DemSolver& dem, nlohmann::json& q, double poros
   const std::vector<GrainTop> tops = grain_tops(dem);
   const Crater c = measure_crater(tops, s_);
   q["crater_volume"] = c.volume;  // eq. 14, m^3
-  q["crater_volume_start"] = start_volume_ < 0 ? c.volume : start_volume_;
+  q["crater_volume_start"] = start_volume_.value_or(c.volume);
   q["crater_depth"] = c.depth;    // H = a - b
   q["crater_rim_radius"] = c.rim_radius;  // L
   q["crater_a"] = c.a;

@@ -71,13 +71,14 @@ class CraterMonitor {
   // wall let slide); empty: no count.
   void set_start_positions(std::map<std::int64_t, Vec3> x) { start_ = std::move(x); }
   // The first sample's volume (the bed before the drop: the method's reading of a rough surface).
-  double start_volume() const { return start_volume_; }
+  std::optional<double> start_volume() const { return start_volume_; }
   void set_start_volume(double v) { start_volume_ = v; }
 
  private:
   CraterSettings s_;
   Vec3 lo_, hi_;
-  double porosity_height_ = 0, start_volume_ = -1, ejection_distance_ = 0;
+  double porosity_height_ = 0, ejection_distance_ = 0;
+  std::optional<double> start_volume_;  // a crater volume may be negative: no sentinel value
   std::map<std::int64_t, Vec3> start_;
   std::string dir_;
   std::ofstream csv_;

@@ -232,7 +232,7 @@ CheckpointExtras FlowScene::body_extras() const {
   rest_.save(e);
   if (drop_) drop_->save(e);
   e["bed_porosity_start"] = porosity0_;
-  if (crater_) e["crater_volume_start"] = crater_->start_volume();
+  if (crater_ && crater_->start_volume()) e["crater_volume_start"] = *crater_->start_volume();
   return e;
 }
 
@@ -648,7 +648,10 @@ void FlowScene::summarise(nlohmann::json& s) {
   s["quantities"]["free_liquid_volume"] = sp.free_liquid_volume;
   s["quantities"]["free_liquid_volume_drift"] =
       free_liquid0_ > 0 ? (sp.free_liquid_volume - free_liquid0_) / free_liquid0_ : 0.0;
+  long layouts = coupled_->solid().layouts_computed();  // bodies laid out again (C1), all ranks
+  MPI_Allreduce(MPI_IN_PLACE, &layouts, 1, MPI_LONG, MPI_SUM, decomp_->comm());
   s["coupling"] = {{"dem_stable_dt", coupled_->dem_stable_dt()},
+                   {"layouts", layouts},
                    {"substeps_per_flow_step", steps_run ? double(substeps_total_) / steps_run : 0.0},
                    {"fluid_force", coupling_.fluid_force}};
   if (rest_.enabled()) rest_.report(s["quantities"], flow_->time());

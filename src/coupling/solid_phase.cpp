@@ -47,6 +47,17 @@ SolidPhase::SolidPhase(const FluidGrid& grid, const DemSolver& dem, double fluid
                            ") m, so that the DEM's ghosts of shape `" + t.name +
                            "` cover every cell its tetrahedra reach");
   }
+  // C1: components rounded to `step` turn the body by at most 4 step (the rounding moves the
+  // quaternion by at most step, the renormalisation by as much again; the angle is twice that), so
+  // a node at distance r moves by at most 4 step r: the largest power of 2 with 4 step r <= the
+  // position step keeps every node within it (at most 2^-6, a small turn however small the body).
+  for (const ShapeTemplate& t : dem.shapes()) {
+    double r = 0;
+    for (const Vec3& n : t.nodes) r = std::max(r, norm(n));
+    turn_step_.push_back(layout_step_ > 0 && r > 0
+                             ? std::min(std::exp2(std::floor(std::log2(layout_step_ / (4 * r)))), std::exp2(-6.0))
+                             : 0.0);
+  }
   alpha_ = grid.make_field();
   solid_mass_ = grid.make_field();
   for (auto& m : solid_momentum_) m = grid.make_field();
@@ -74,7 +85,7 @@ void SolidPhase::update(const DemSolver& dem) {
   for (const std::size_t b : body_index_) {
     const ShapeTemplate& t = shapes[static_cast<std::size_t>(p.shape[b] - 1)];
     if (b < p.owned) body_volume_ += t.volume;
-    const Pose pose = layout_pose(p.pos(b), {p.q[4 * b], p.q[4 * b + 1], p.q[4 * b + 2], p.q[4 * b + 3]});
+    const Pose pose = layout_pose(p.pos(b), {p.q[4 * b], p.q[4 * b + 1], p.q[4 * b + 2], p.q[4 * b + 3]}, p.shape[b]);
     Layout& lay = cache_[p.order[b]];
     lay.generation = generation_;
     if (!lay.valid || lay.pose != pose) {
@@ -115,13 +126,14 @@ void SolidPhase::update(const DemSolver& dem) {
 }
 
 // The pose a body is laid out at: its position rounded to multiples of layout_step_ and its
-// quaternion's components to multiples of 2^-12, renormalised; exact when layout_step_ is 0. A
-// function of the pose alone, so every rank holding the body lays it out at the same pose.
-SolidPhase::Pose SolidPhase::layout_pose(const Vec3& x, const Quaternion& q) const {
+// quaternion's components to multiples of its shape's turn step, renormalised; exact when
+// layout_step_ is 0. A function of the pose alone, so every rank holding the body lays it out at
+// the same pose.
+SolidPhase::Pose SolidPhase::layout_pose(const Vec3& x, const Quaternion& q, int shape) const {
   if (layout_step_ == 0) return {x.x, x.y, x.z, q.w, q.x, q.y, q.z};
   auto snap = [&](double v, double step) { return std::nearbyint(v / step) * step; };
-  constexpr double kTurn = 1.0 / 4096;
-  Quaternion r{snap(q.w, kTurn), snap(q.x, kTurn), snap(q.y, kTurn), snap(q.z, kTurn)};
+  const double turn = turn_step_[static_cast<std::size_t>(shape - 1)];
+  Quaternion r{snap(q.w, turn), snap(q.x, turn), snap(q.y, turn), snap(q.z, turn)};
   const double n = std::sqrt(r.norm2());
   return {snap(x.x, layout_step_), snap(x.y, layout_step_), snap(x.z, layout_step_), r.w / n, r.x / n, r.y / n,
           r.z / n};

@@ -47,9 +47,10 @@ class SolidPhase {
   // kMinDensityRatio times `fluid_density` (the denser fluid's), no periodic flow boundary, and the
   // tetrahedra plus half a cell within the DEM's ghost reach.
   // layout_tolerance (a fraction of the smallest cell side; 0: exact): a body is laid out at its pose
-  // rounded to that step (and its orientation to quaternion components of 2^-12), and its lay-out
-  // is reused while that rounded pose is unchanged: a bed at rest is laid out once. The solid volume
-  // stays exact; the body sits in the grid up to half a step (and about 1e-3 rad) from its pose.
+  // rounded to that step (and its orientation to quaternion components of a power of 2 that moves
+  // no node of its shape by more than the step), and its lay-out is reused while that rounded pose is
+  // unchanged: a bed at rest is laid out once. The solid volume stays exact; every node of the body
+  // sits in the grid within (1 + sqrt(3)/2) steps of its place (theory C1).
   SolidPhase(const FluidGrid& grid, const DemSolver& dem, double fluid_density, double layout_tolerance = 0);
   static constexpr double kMinDensityRatio = 0.3;
 
@@ -61,7 +62,7 @@ class SolidPhase {
   // Ghosted layout of the grid (owned cells set, ghosts exchanged).
   const std::vector<double>& fraction() const { return alpha_; }
   using Pose = std::array<double, 7>;  // x, y, z, qw, qx, qy, qz
-  Pose layout_pose(const Vec3& x, const Quaternion& q) const;
+  Pose layout_pose(const Vec3& x, const Quaternion& q, int shape) const;
   long layouts_computed() const { return layouts_; }  // this rank, whole run
   SolidPhaseStats stats(const FlowSolver& flow) const;  // collective
 
@@ -86,6 +87,7 @@ class SolidPhase {
   };
   std::unordered_map<std::int64_t, Layout> cache_;
   double layout_step_ = 0;
+  std::vector<double> turn_step_;  // per shape (index shape - 1): quaternion components' rounding
   long generation_ = 0, layouts_ = 0;
   std::vector<std::pair<std::size_t, double>> scratch_;
 };

@@ -98,6 +98,14 @@ TEST(DropOnSand, PlacesTheDropAndMeasuresTheBed) {
   EXPECT_NEAR(q["ejection_distance"].get<double>(), 2 * 1.27e-3, 0.05e-3);  // the grain's length
   for (const char* f : {"crater.csv", "crater_rings.csv", "crater_surface.csv"})
     EXPECT_TRUE(fs::exists(kDir + "/two/" + f)) << f;
+  // The bed's crater measure before the drop is crater.csv's first row (t = 0), whatever its sign.
+  std::ifstream csv(kDir + "/two/crater.csv");
+  std::string header, first;
+  std::getline(csv, header);
+  std::getline(csv, first);
+  const double v0 = std::stod(first.substr(first.find(',') + 1));
+  EXPECT_EQ(std::stod(first.substr(0, first.find(','))), 0.0);
+  EXPECT_NEAR(q["crater_volume_start"].get<double>(), v0, 1e-9 * std::abs(v0) + 1e-20);
 }
 
 TEST(DropOnSand, SameCraterOnOneAndTwoRanks) {

@@ -132,13 +132,20 @@ TEST(SolidFraction, HoldsTheBodiesExactlyWithTheSameBitsOnAnyRankCount) {
     TetRasterizer raster;
     const ShapeTemplate& t = rig.dem->shapes()[0];
     for (const BodyRecord& b : all_bodies(*rig.dem)) {
-      const auto pose = solid.layout_pose({b.x[0], b.x[1], b.x[2]}, {b.q[0], b.q[1], b.q[2], b.q[3]});
+      const auto pose = solid.layout_pose({b.x[0], b.x[1], b.x[2]}, {b.q[0], b.q[1], b.q[2], b.q[3]}, 1);
       if (tolerance == 0) {
         EXPECT_EQ(pose[0], b.x[0]);
       }
       const Quaternion q{pose[3], pose[4], pose[5], pose[6]};
       const Vec3 xb{pose[0], pose[1], pose[2]};
       EXPECT_LE(norm(xb - Vec3{b.x[0], b.x[1], b.x[2]}), 0.5 * std::sqrt(3.0) * tolerance * g.h(0) * (1 + 1e-12));
+      // Every node within (1 + sqrt(3)/2) steps of its place (theory C1: the turn moves none more than a step).
+      const Quaternion q_exact{b.q[0], b.q[1], b.q[2], b.q[3]};
+      for (const Vec3& n : t.nodes) {
+        const Vec3 exact = Vec3{b.x[0], b.x[1], b.x[2]} + q_exact.rotate(n);
+        EXPECT_LE(norm(xb + Quaternion{pose[3], pose[4], pose[5], pose[6]}.rotate(n) - exact),
+                  (1 + 0.5 * std::sqrt(3.0)) * tolerance * g.h(0) * (1 + 1e-9) + 1e-18);
+      }
       std::vector<std::pair<std::size_t, double>> pieces;
       for (const auto& tet : t.tetrahedra) {
         Tet w;
