@@ -102,7 +102,17 @@ void CraterMonitor::sample(const DemSolver& dem, double time) {
        << 0.5 * (c.section_x.depth() + c.section_y.depth()) << std::endl;
 }
 
-void CraterMonitor::finish(const DemSolver& dem, nlohmann::json& q, double porosity_start) {
+void CraterMonitor::save(CheckpointExtras& e) const {
+  e["bed_porosity_start"] = porosity_start_;
+  if (start_volume_) e["crater_volume_start"] = *start_volume_;
+}
+
+void CraterMonitor::restore(const CheckpointExtras& e) {
+  if (auto it = e.find("bed_porosity_start"); it != e.end()) porosity_start_ = it->second;
+  if (auto it = e.find("crater_volume_start"); it != e.end()) start_volume_ = it->second;
+}
+
+void CraterMonitor::finish(const DemSolver& dem, nlohmann::json& q) {
   const std::vector<GrainTop> tops = grain_tops(dem);
   const Crater c = measure_crater(tops, s_);
   q["crater_volume"] = c.volume;  // eq. 14, m^3
@@ -119,7 +129,7 @@ void CraterMonitor::finish(const DemSolver& dem, nlohmann::json& q, double poros
   q["crater_settings"] = {{"cell", s_.cell}, {"ring_width", s_.ring_width}, {"surface_layer", s_.surface_layer},
                           {"max_radius", s_.max_radius}, {"axis", {s_.cx, s_.cy}}};
   q["bed_porosity"] = porosity(dem);
-  q["bed_porosity_start"] = porosity_start;
+  q["bed_porosity_start"] = porosity_start_;
   q["porosity_height"] = porosity_height_;
   if (!start_.empty()) {
     const ParticleStore& p = dem.particles();

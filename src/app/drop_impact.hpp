@@ -64,20 +64,23 @@ class CraterMonitor {
   // Collective: the crater now; rank 0 appends a row to DIR/crater.csv.
   void sample(const DemSolver& dem, double time);
   // Collective: the crater at the end into quantities; rank 0 writes the ring profile and surface.
-  void finish(const DemSolver& dem, nlohmann::json& q, double porosity_start);
+  void finish(const DemSolver& dem, nlohmann::json& q);
   void open(const std::string& dir, bool append, bool root);
   // Where the bodies started (the bed file), for the count of grains that end more than
   // ejection_distance from there (`displaced_grains`: the ejected grains and those the crater's
   // wall let slide); empty: no count.
   void set_start_positions(std::map<std::int64_t, Vec3> x) { start_ = std::move(x); }
-  // The first sample's volume (the bed before the drop: the method's reading of a rough surface).
-  std::optional<double> start_volume() const { return start_volume_; }
-  void set_start_volume(double v) { start_volume_ = v; }
+  // Collective, a fresh run's start: the bed's porosity before the drop.
+  void start(const DemSolver& dem) { porosity_start_ = porosity(dem); }
+  // The start's measures (porosity; the first sample's crater volume, the method's reading of the
+  // bed before the drop) into a checkpoint's extras and back.
+  void save(CheckpointExtras& e) const;
+  void restore(const CheckpointExtras& e);
 
  private:
   CraterSettings s_;
   Vec3 lo_, hi_;
-  double porosity_height_ = 0, ejection_distance_ = 0;
+  double porosity_height_ = 0, ejection_distance_ = 0, porosity_start_ = 0;
   std::optional<double> start_volume_;  // a crater volume may be negative: no sentinel value
   std::map<std::int64_t, Vec3> start_;
   std::string dir_;

@@ -223,7 +223,6 @@ class FlowScene final : public SteppedScene {
   // The drop-impact scene (sections drop and crater).
   std::optional<DropOnBed> drop_;
   std::optional<CraterMonitor> crater_;
-  double porosity0_ = 0;  // the bed's porosity at the start
   bool resuming_ = false;  // the first snapshot of a restarted run
 };
 
@@ -231,16 +230,14 @@ CheckpointExtras FlowScene::body_extras() const {
   CheckpointExtras e;
   rest_.save(e);
   if (drop_) drop_->save(e);
-  e["bed_porosity_start"] = porosity0_;
-  if (crater_ && crater_->start_volume()) e["crater_volume_start"] = *crater_->start_volume();
+  if (crater_) crater_->save(e);
   return e;
 }
 
 void FlowScene::restore_body_extras(const CheckpointExtras& e) {
   rest_.restore(e);
   if (drop_) drop_->restore(e);
-  if (auto it = e.find("bed_porosity_start"); it != e.end()) porosity0_ = it->second;
-  if (auto it = e.find("crater_volume_start"); crater_ && it != e.end()) crater_->set_start_volume(it->second);
+  if (crater_) crater_->restore(e);
 }
 
 void FlowScene::read_bodies(const ConfigNode& root, const std::string& case_dir) {
@@ -438,7 +435,7 @@ void FlowScene::start(const RunOptions& opt) {
       s.a = d.centre, s.b = d.semi_axes, s.velocity = d.velocity;
       shapes_.push_back(s);
     }
-    if (crater_) porosity0_ = crater_->porosity(*dem_);
+    if (crater_) crater_->start(*dem_);
   }
   coupled_ = std::make_unique<CoupledSolver>(*flow_, *dem_, coupling_);
 }
@@ -470,7 +467,7 @@ void FlowScene::begin_output(const RunOptions& opt) {
       std::printf("  bodies: %ld, DEM stable step %.4g s, sub-steps %s\n", bodies,
                   coupled_->dem_stable_dt(),
                   coupling_.substeps ? std::to_string(*coupling_.substeps).c_str() : "from each flow step's dt");
-    if (drop_)
+    if (drop_ && !opt.restart)  // a restart has no new drop: the drop is in the flow's state
       std::printf("  drop: centre %.4g m above the floor, %.4g m above the bed's top\n", shapes_.back().a.z,
                   shapes_.back().a.z - drop_->bed_top_height());
     if (!deprecated_.empty()) std::printf("  warning: %s\n", deprecated_.c_str());
@@ -656,7 +653,7 @@ void FlowScene::summarise(nlohmann::json& s) {
                    {"fluid_force", coupling_.fluid_force}};
   if (rest_.enabled()) rest_.report(s["quantities"], flow_->time());
   if (drop_) drop_->report(s["quantities"]);
-  if (crater_) crater_->finish(*dem_, s["quantities"], porosity0_);
+  if (crater_) crater_->finish(*dem_, s["quantities"]);
   if (!bodies_file_.empty()) s["bodies_file"] = fs::absolute(bodies_file_).string();
   s["output"]["checkpoint_bodies"] = "checkpoint_bodies.h5";
   s["output"]["scene"] = fields_->count() ? "scene.xmf" : "";
