@@ -181,7 +181,10 @@ class FlowScene final : public SteppedScene {
   bool after_step(const RunOptions& opt) override;
   void write_snapshot() override;
   void write_checkpoint(const std::string& path) override {
-    write_flow_checkpoint(path, *flow_);
+    if (coupled_)
+      write_flow_checkpoint(path, *flow_, {{"liquid_content", &coupled_->liquid().content()}});
+    else
+      write_flow_checkpoint(path, *flow_);
     if (dem_) tessera::write_checkpoint(bodies_path(path), *dem_, body_extras());
   }
   CheckpointExtras body_extras() const;
@@ -218,6 +221,14 @@ class FlowScene final : public SteppedScene {
   std::string output_dir_;
   int last_substeps_ = 0;
   double free_liquid0_ = 0;  // liquid outside the bodies at the start of this run
+  int pore_passes_max_ = 0;  // the liquid stage's largest number of passes and residual (C7), this run
+  double pore_residual_max_ = 0;
+  // The liquid volume: sum f V_c in the flow scene, the liquid content's sum in the coupled one (C7);
+  // the part of it within the cells' fluid part (all of it, to the stage's tolerance).
+  double liquid_volume() const { return coupled_ ? coupled_->liquid().volume() : flow_->liquid_volume(); }
+  double free_liquid_volume() const {
+    return liquid_volume() - coupled_->liquid().volume_in_bodies(coupled_->solid().fraction());
+  }
   long substeps_total_ = 0;
   SettleCriterion rest_;  // bodies.settled_kinetic_energy: the run ends when the bodies are at rest
   // The drop-impact scene (sections drop and crater).
@@ -438,6 +449,9 @@ void FlowScene::start(const RunOptions& opt) {
     if (crater_) crater_->start(*dem_);
   }
   coupled_ = std::make_unique<CoupledSolver>(*flow_, *dem_, coupling_);
+  if (opt.restart)
+    read_checkpoint_cell_field(*opt.restart, flow_->grid(), "liquid_content", coupled_->mutable_liquid().mutable_content(),
+                               "the liquid in the cells' fluid part, theory C7; coupled checkpoints from 2026-11-29 on");
 }
 
 void FlowScene::begin_output(const RunOptions& opt) {
@@ -452,9 +466,9 @@ void FlowScene::begin_output(const RunOptions& opt) {
   }
   if (coupled_) {
     coupled_->start(!opt.restart);  // a restart's velocities were corrected when saved
-    free_liquid0_ = coupled_->solid().stats(*flow_).free_liquid_volume;
+    free_liquid0_ = free_liquid_volume();
   }
-  volume0_ = flow_->liquid_volume();
+  volume0_ = liquid_volume();
   peak_speed_ = flow_->max_speed();
   output_dir_ = opt.output_dir;
   const long bodies = dem_ ? dem_->stats().bodies : 0;  // collective
@@ -488,6 +502,7 @@ void FlowScene::begin_output(const RunOptions& opt) {
   fields_ = std::make_unique<FieldSeries>(opt.output_dir + "/fields");
   if (coupled_) {
     fields_->add_field("solid_fraction", &coupled_->solid().fraction());
+    fields_->add_field("liquid_content", &coupled_->liquid().content());
     bodies_out_ = std::make_unique<SnapshotSeries>(opt.output_dir + "/snapshots");
     if (crater_)
       crater_->open(opt.output_dir, opt.restart.has_value() && fs::exists(opt.output_dir + "/crater.csv"), root);
@@ -549,6 +564,8 @@ void FlowScene::step(const RunOptions& opt) {
       const CoupledStepStats cs = coupled_->step(dt);
       last_ = cs.flow;
       last_substeps_ = cs.substeps;
+      pore_passes_max_ = std::max(pore_passes_max_, cs.liquid.passes);
+      pore_residual_max_ = std::max(pore_residual_max_, cs.liquid.residual);
       substeps_total_ += cs.substeps;
     } else {
       last_ = flow_->advance(dt);
@@ -574,7 +591,7 @@ bool FlowScene::after_step(const RunOptions& opt) {
   peak_speed_ = std::max(peak_speed_, vmax);
   if (sample) {
     next_series_ = series_interval_ > 0 ? Schedule(series_interval_, flow_->time()).next() : flow_->time();
-    const double volume = flow_->liquid_volume(), ke = flow_->kinetic_energy(), front = front_position();
+    const double volume = liquid_volume(), ke = flow_->kinetic_energy(), front = front_position();
     std::string bodies;
     if (dem_) bodies = body_series();
     if (flow_->grid().rank() == 0)
@@ -586,7 +603,7 @@ bool FlowScene::after_step(const RunOptions& opt) {
 }
 
 std::string FlowScene::progress() {
-  const double drift = (flow_->liquid_volume() - volume0_) / volume0_;
+  const double drift = (liquid_volume() - volume0_) / volume0_;
   const double vmax = flow_->max_speed();
   char line[200];
   std::snprintf(line, sizeof line, "dt %.3g (%s)  Poisson %d its  max|u| %.3g m/s  volume drift %.2e", last_.dt,
@@ -609,7 +626,7 @@ void FlowScene::summarise(nlohmann::json& s) {
   const FluidGrid& g = flow_->grid();
   const long cells = long(g.cells()[0]) * g.cells()[1] * g.cells()[2];
   const long steps_run = s["steps_this_run"].get<long>();
-  const double volume = flow_->liquid_volume();
+  const double volume = liquid_volume();
   nlohmann::json q;
   q["liquid_volume"] = volume;
   q["liquid_volume_drift"] = volume0_ > 0 ? (volume - volume0_) / volume0_ : 0.0;
@@ -634,7 +651,7 @@ void FlowScene::summarise(nlohmann::json& s) {
                  {"snapshots", fields_->count() ? "fields/fields.xmf" : ""}};
   if (!coupled_) return;
   const DemStats b = dem_->stats();
-  const SolidPhaseStats sp = coupled_->solid().stats(*flow_);
+  const SolidPhaseStats sp = coupled_->solid().stats();
   s["quantities"]["bodies"] = b.bodies;
   s["quantities"]["body_kinetic_energy"] = b.kinetic_translational + b.kinetic_rotational;
   s["quantities"]["body_max_speed"] = b.max_speed;
@@ -642,9 +659,12 @@ void FlowScene::summarise(nlohmann::json& s) {
   s["quantities"]["body_volume"] = sp.body_volume;
   s["quantities"]["solid_volume_error"] = sp.body_volume > 0 ? (sp.solid_volume - sp.body_volume) / sp.body_volume : 0.0;
   s["quantities"]["max_solid_fraction"] = sp.max_fraction;
-  s["quantities"]["free_liquid_volume"] = sp.free_liquid_volume;
-  s["quantities"]["free_liquid_volume_drift"] =
-      free_liquid0_ > 0 ? (sp.free_liquid_volume - free_liquid0_) / free_liquid0_ : 0.0;
+  const double free = free_liquid_volume();
+  s["quantities"]["free_liquid_volume"] = free;
+  s["quantities"]["free_liquid_volume_drift"] = free_liquid0_ > 0 ? (free - free_liquid0_) / free_liquid0_ : 0.0;
+  s["quantities"]["liquid_in_bodies"] = volume - free;
+  s["quantities"]["pore_liquid_max_passes"] = pore_passes_max_;
+  s["quantities"]["pore_liquid_max_residual"] = pore_residual_max_;
   long layouts = coupled_->solid().layouts_computed();  // bodies laid out again (C1), all ranks
   MPI_Allreduce(MPI_IN_PLACE, &layouts, 1, MPI_LONG, MPI_SUM, decomp_->comm());
   s["coupling"] = {{"dem_stable_dt", coupled_->dem_stable_dt()},

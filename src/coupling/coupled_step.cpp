@@ -18,14 +18,20 @@ CouplingSettings CouplingSettings::from_config(const ConfigNode& c) {
 
 CoupledSolver::CoupledSolver(FlowSolver& flow, DemSolver& dem, CouplingSettings settings)
     : flow_(flow), dem_(dem), settings_(settings), solid_(flow.grid(), dem, std::max(flow.settings().liquid.density, flow.settings().gas.density),
-             settings.layout_tolerance), dem_stable_dt_(dem.dt()) {
+             settings.layout_tolerance), liquid_(flow.grid()), dem_stable_dt_(dem.dt()) {
   dem_.use_external_loads(settings_.fluid_force);
   flow_.keep_stress_divergence(settings_.fluid_force);
 }
 
-void CoupledSolver::start(bool correct) {
+void CoupledSolver::start(bool fresh) {
   solid_.update(dem_);
-  if (correct) solid_.correct_velocity(flow_, dem_);
+  if (!fresh) {
+    liquid_.resume(solid_.fraction());
+    return;
+  }
+  liquid_.start(flow_, solid_.fraction());
+  liquid_.settle(flow_, solid_.fraction());
+  solid_.correct_velocity(flow_, dem_);
 }
 
 int CoupledSolver::substeps_for(double dt) const {
@@ -39,7 +45,9 @@ CoupledStepStats CoupledSolver::step(double dt) {
   CoupledStepStats st;
   {
     auto t = timers_.scope("flow");
+    liquid_.before_flow(flow_);
     st.flow = flow_.advance(dt);
+    liquid_.after_flow(flow_);
   }
   if (settings_.fluid_force) {
     auto t = timers_.scope("fluid_force");
@@ -54,6 +62,14 @@ CoupledStepStats CoupledSolver::step(double dt) {
   {
     auto t = timers_.scope("solid_fraction");
     solid_.update(dem_);
+  }
+  {
+    auto t = timers_.scope("pore_liquid");
+    liquid_.displace(solid_.moves(), dem_.particles().size(), [&](std::vector<double>& sums) {
+      dem_.reverse_add_ghosts(sums, 2);
+      dem_.forward_to_ghosts(sums, 2);
+    });
+    st.liquid = liquid_.settle(flow_, solid_.fraction());
   }
   {
     auto t = timers_.scope("correction");

@@ -8,6 +8,8 @@
 //                   ghost shares sent back to the owner (SolidPhase::fluid_loads, C3)
 //   dem_substeps    L DEM steps of dt / L with that load held (DemSolver::advance, C5)
 //   solid_fraction  the moved tetrahedra laid over the cells again (SolidPhase::update, C1-C2)
+//   pore_liquid     the liquid kept in the cells' fluid part: what the flow carried across faces
+//                   (recorded around the flow stage) and what the moved bodies displaced (PoreLiquid, C7)
 //   correction      cell velocities become the mass average of fluid and bodies (C4)
 //
 // The flow's pressure equation runs over the whole grid with the fluid's density in every cell:
@@ -17,6 +19,7 @@
 #include <optional>
 
 #include "core/config.hpp"
+#include "coupling/pore_liquid.hpp"
 #include "coupling/solid_phase.hpp"
 
 namespace tessera {
@@ -32,6 +35,7 @@ struct CoupledStepStats {
   FlowStepStats flow;
   int substeps = 0;
   double dem_dt = 0;
+  PoreLiquidStats liquid;
 };
 
 class CoupledSolver {
@@ -39,15 +43,18 @@ class CoupledSolver {
   // Both solvers set up (DemSolver::setup, FlowSolver::initialize); keeps references.
   CoupledSolver(FlowSolver& flow, DemSolver& dem, CouplingSettings settings);
 
-  // The solid phase of the current bodies; `correct` also corrects the cell velocities (C4) (a fresh
-  // start; a restart's velocities were corrected before they were saved).
-  void start(bool correct = true);
+  // The solid phase of the current bodies. `fresh`: also corrects the cell velocities (C4) and puts
+  // the liquid in the cells' fluid part (C7); a restart's velocities were corrected before they were
+  // saved, and its liquid content is read (mutable_liquid) before or after this call.
+  void start(bool fresh = true);
   CoupledStepStats step(double dt);
   // L for a flow step dt.
   int substeps_for(double dt) const;
   double dem_stable_dt() const { return dem_stable_dt_; }
 
   const SolidPhase& solid() const { return solid_; }
+  const PoreLiquid& liquid() const { return liquid_; }
+  PoreLiquid& mutable_liquid() { return liquid_; }
   FlowSolver& flow() { return flow_; }
   DemSolver& dem() { return dem_; }
   PhaseTimers& timers() { return timers_; }
@@ -57,6 +64,7 @@ class CoupledSolver {
   DemSolver& dem_;
   CouplingSettings settings_;
   SolidPhase solid_;
+  PoreLiquid liquid_;
   double dem_stable_dt_ = 0;
   PhaseTimers timers_;
 };

@@ -80,6 +80,7 @@ void SolidPhase::update(const DemSolver& dem) {
   cell_.clear();
   volume_.clear();
   body_volume_ = 0;
+  moves_.clear();
   ++generation_;
   std::vector<Vec3> world;
   for (const std::size_t b : body_index_) {
@@ -90,6 +91,8 @@ void SolidPhase::update(const DemSolver& dem) {
     lay.generation = generation_;
     if (!lay.valid || lay.pose != pose) {
       ++layouts_;
+      const bool moved = lay.valid;  // a body laid out here before: what it left and took (C7)
+      if (moved) old_cells_.swap(lay.cells);
       lay.valid = true;
       lay.pose = pose;
       const Quaternion q{pose[3], pose[4], pose[5], pose[6]};
@@ -110,6 +113,7 @@ void SolidPhase::update(const DemSolver& dem) {
         for (; e < scratch_.size() && scratch_[e].first == c; ++e) vol += scratch_[e].second;
         lay.cells.emplace_back(c, vol);
       }
+      if (moved) record_move(b, old_cells_, lay.cells);
     }
     const double rho = p.mass[b] / t.volume;
     for (const auto& [c, vol] : lay.cells) {
@@ -123,6 +127,24 @@ void SolidPhase::update(const DemSolver& dem) {
   // Bodies no longer here (migrated, or no longer a ghost) leave the cache.
   std::erase_if(cache_, [&](const auto& e) { return e.second.generation != generation_; });
   g.exchange(alpha_);
+}
+
+// Both lists are sorted by cell: one entry per cell either holds, new volume minus old.
+void SolidPhase::record_move(std::size_t b, const CellVolumes& before, const CellVolumes& after) {
+  std::size_t i = 0, j = 0;
+  while (i < before.size() || j < after.size()) {
+    std::size_t c;
+    double dv;
+    if (j == after.size() || (i < before.size() && before[i].first < after[j].first))
+      c = before[i].first, dv = -before[i].second, ++i;
+    else if (i == before.size() || after[j].first < before[i].first)
+      c = after[j].first, dv = after[j].second, ++j;
+    else
+      c = after[j].first, dv = after[j].second - before[i].second, ++i, ++j;
+    if (dv != 0) moves_.cell.push_back(c), moves_.dv.push_back(dv);
+  }
+  moves_.body.push_back(b);
+  moves_.first.push_back(moves_.cell.size());
 }
 
 // The pose a body is laid out at: its position rounded to multiples of layout_step_ and its
@@ -280,10 +302,10 @@ void SolidPhase::correct_velocity(FlowSolver& flow, const DemSolver& dem) {
   flow.velocity_changed();
 }
 
-SolidPhaseStats SolidPhase::stats(const FlowSolver& flow) const {
+SolidPhaseStats SolidPhase::stats() const {
   const FluidGrid& g = grid_;
   SolidPhaseStats s;
-  ExactSum sums[3];
+  ExactSum sums[2];
   double amax = 0;
   long covered = 0;
   for (int k = g.begin(2); k < g.end(2); ++k)
@@ -292,7 +314,6 @@ SolidPhaseStats SolidPhase::stats(const FlowSolver& flow) const {
         const std::size_t c = g.at(i, j, k);
         const double a = alpha_[c];
         sums[0].add(a * g.cell_volume());
-        sums[2].add(flow.fraction()[c] * (1 - std::min(a, 1.0)) * g.cell_volume());
         amax = std::max(amax, a);
         covered += a > 0;
       }
@@ -300,7 +321,6 @@ SolidPhaseStats SolidPhase::stats(const FlowSolver& flow) const {
   ExactSum::all_reduce(sums, g.comm());
   s.solid_volume = sums[0].value();
   s.body_volume = sums[1].value();
-  s.free_liquid_volume = sums[2].value();
   s.max_fraction = g.reduce_max(amax);
   MPI_Allreduce(&covered, &s.covered_cells, 1, MPI_LONG, MPI_SUM, g.comm());
   return s;

@@ -26,6 +26,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "coupling/pore_liquid.hpp"
 #include "coupling/tet_clip.hpp"
 #include "fluid/flow_solver.hpp"
 #include "solid/dem_solver.hpp"
@@ -37,7 +38,6 @@ struct SolidPhaseStats {
   double solid_volume = 0;  // sum of alpha_s V_c over the grid (collective)
   double body_volume = 0;   // sum of the bodies' tetrahedra volumes (owned bodies, collective)
   double max_fraction = 0;  // largest alpha_s (above 1 where bodies overlap at contacts)
-  double free_liquid_volume = 0;  // sum f (1 - min(alpha_s, 1)) V_c: the liquid outside the bodies
   long covered_cells = 0;
 };
 
@@ -61,10 +61,13 @@ class SolidPhase {
 
   // Ghosted layout of the grid (owned cells set, ghosts exchanged).
   const std::vector<double>& fraction() const { return alpha_; }
+  // The bodies laid out again by the last update: per body, the change of the volume it shares with
+  // each owned cell (the liquid stage moves the liquid they displaced, C7).
+  const BodyMoves& moves() const { return moves_; }
   using Pose = std::array<double, 7>;  // x, y, z, qw, qx, qy, qz
   Pose layout_pose(const Vec3& x, const Quaternion& q, int shape) const;
   long layouts_computed() const { return layouts_; }  // this rank, whole run
-  SolidPhaseStats stats(const FlowSolver& flow) const;  // collective
+  SolidPhaseStats stats() const;  // collective
 
  private:
   const FluidGrid& grid_;
@@ -79,9 +82,10 @@ class SolidPhase {
   void solid_momentum(const DemSolver& dem);  // P_s per cell from the bodies' velocities now
   TetRasterizer raster_;
   // Lay-outs by body order key, kept while the body's rounded pose is unchanged.
+  using CellVolumes = std::vector<std::pair<std::size_t, double>>;
   struct Layout {
     Pose pose{};
-    std::vector<std::pair<std::size_t, double>> cells;
+    CellVolumes cells;
     long generation = 0;
     bool valid = false;
   };
@@ -90,6 +94,9 @@ class SolidPhase {
   std::vector<double> turn_step_;  // per shape (index shape - 1): quaternion components' rounding
   long generation_ = 0, layouts_ = 0;
   std::vector<std::pair<std::size_t, double>> scratch_;
+  CellVolumes old_cells_;
+  BodyMoves moves_;
+  void record_move(std::size_t b, const CellVolumes& before, const CellVolumes& after);
 };
 
 }  // namespace tessera

@@ -82,6 +82,12 @@ void FlowSolver::velocity_changed() {
   fill_velocity_ghosts(u_);
 }
 
+void FlowSolver::fraction_changed() {
+  grid_->exchange(f_);
+  fill_fraction_ghosts(f_);
+  update_properties();
+}
+
 void FlowSolver::keep_stress_divergence(bool on) {
   for (auto& s : stress_div_) s = on ? grid_->make_field() : std::vector<double>{};
 }

@@ -136,6 +136,9 @@ class FlowSolver {
   void refresh();
   // After owned cell velocities were changed from outside (the coupling's correction): ghosts.
   void velocity_changed();
+  // After owned liquid fractions were changed from outside (the coupling's liquid in the fluid
+  // part): ghosts, density and viscosity.
+  void fraction_changed();
   // On: the viscous stage keeps div(tau) per owned cell (N/m^3; the coupling's viscous force on
   // bodies reads it). Off (the default): not stored.
   void keep_stress_divergence(bool on);

@@ -120,7 +120,7 @@ std::string FieldSeries::grid_xml(const FluidGrid& g, int s, const std::string& 
 }
 
 
-void write_flow_checkpoint(const std::string& path, const FlowSolver& flow) {
+void write_flow_checkpoint(const std::string& path, const FlowSolver& flow, const std::vector<NamedCellField>& extra) {
   const FluidGrid& g = flow.grid();
   const std::string tmp = path + ".tmp";
   {
@@ -139,6 +139,8 @@ void write_flow_checkpoint(const std::string& path, const FlowSolver& flow) {
       const std::string nm = std::string("face_velocity_") + "xyz"[d];
       f.write_block(nm, pack(g, fb, {&flow.face_velocity(d)}).data(), fb.global, fb.offset, fb.count, 1);
     }
+    for (const auto& [name, field] : extra)
+      f.write_block(name, pack(g, b, {field}).data(), b.global, b.offset, b.count, 1);
   }
   MPI_Barrier(g.comm());
   if (comm_rank(g.comm()) == 0) fs::rename(tmp, path);
@@ -162,6 +164,15 @@ void read_flow_checkpoint(const std::string& path, FlowSolver& flow) {
   }
   flow.set_clock(f.attribute_double("time"), f.attribute_long("steps"), f.attribute_double("last_dt"));
   flow.refresh();
+}
+
+void read_checkpoint_cell_field(const std::string& path, const FluidGrid& g, const std::string& name,
+                                std::vector<double>& field, const std::string& what) {
+  H5File f = H5File::open_read(path, g.comm());
+  if (!f.has(name)) throw InputError("--restart", path, "a checkpoint with " + name + " (" + what + ")");
+  const Block b = block_of(g);
+  unpack(g, b, f.read_block(name, b.global, b.offset, b.count, 1), {&field});
+  g.exchange(field);
 }
 
 }  // namespace tessera

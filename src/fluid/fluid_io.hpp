@@ -33,9 +33,15 @@ class FieldSeries {
   std::vector<std::pair<std::string, const std::vector<double>*>> extra_;
 };
 
-// Collective.
-void write_flow_checkpoint(const std::string& path, const FlowSolver& flow);
+// Collective. `extra`: further cell scalars (ghosted layout of the flow's grid) saved beside the
+// flow's own (the coupling's liquid content).
+using NamedCellField = std::pair<std::string, const std::vector<double>*>;
+void write_flow_checkpoint(const std::string& path, const FlowSolver& flow, const std::vector<NamedCellField>& extra = {});
 // Collective. Same grid required (checked); any rank count.
 void read_flow_checkpoint(const std::string& path, FlowSolver& flow);
+// Collective: one of the extra cell scalars of a flow checkpoint into `field` (owned cells; ghosts
+// exchanged). A checkpoint without it is an InputError naming `what`.
+void read_checkpoint_cell_field(const std::string& path, const FluidGrid& grid, const std::string& name,
+                                std::vector<double>& field, const std::string& what);
 
 }  // namespace tessera

@@ -174,6 +174,8 @@ class DemSolver {
   // Collective: `values` holds `width` doubles per local body (owned, then ghosts); each ghost's are
   // added to its owner's (reverse communication, Halo::reverse_add). Valid between two steps.
   void reverse_add_ghosts(std::vector<double>& values, int width) { halo_.reverse_add(values, width); }
+  // Owners' values to their ghost copies (Halo::forward_values).
+  void forward_to_ghosts(std::vector<double>& values, int width) { halo_.forward_values(values, width); }
   // Collective: ghosts take their owners' x, v, w (and q) now, after an outside change of owned
   // bodies' velocities between steps (the coupling's momentum exchange).
   void refresh_ghosts() { halo_.forward(p_); }

@@ -151,6 +151,21 @@ void Halo::forward(ParticleStore& p) {
   }
 }
 
+void Halo::forward_values(std::vector<double>& values, int width) {
+  MPI_Comm comm = decomp_.comm();
+  const std::size_t w = static_cast<std::size_t>(width);
+  for (const auto& s : swaps_) {
+    out_.resize(s.send.size() * w);
+    for (std::size_t k = 0; k < s.send.size(); ++k)
+      for (std::size_t c = 0; c < w; ++c) out_[k * w + c] = values[static_cast<std::size_t>(s.send[k]) * w + c];
+    in_.resize(s.recv_count * w);
+    MPI_Sendrecv(out_.data(), static_cast<int>(out_.size()), MPI_DOUBLE, s.send_rank, 15, in_.data(),
+                 static_cast<int>(in_.size()), MPI_DOUBLE, s.recv_rank, 15, comm, MPI_STATUS_IGNORE);
+    if (s.send_rank != MPI_PROC_NULL) bytes_sent_ += out_.size() * sizeof(double);
+    std::copy(in_.begin(), in_.end(), values.begin() + static_cast<std::ptrdiff_t>(s.recv_first * w));
+  }
+}
+
 void Halo::reverse_add(std::vector<double>& values, int width) {
   MPI_Comm comm = decomp_.comm();
   const std::size_t w = static_cast<std::size_t>(width);

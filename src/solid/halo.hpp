@@ -43,6 +43,8 @@ class Halo {
   // to its owner's (a corner ghost passes through the rank that forwarded it). Owned values end
   // up as their own plus every ghost copy's, in an order fixed by the decomposition.
   void reverse_add(std::vector<double>& values, int width);
+  // The other way: every ghost's `width` values become its owner's (along the swaps, as forward()).
+  void forward_values(std::vector<double>& values, int width);
 
   std::size_t bytes_sent() const { return bytes_sent_; }
   std::size_t migrations() const { return migrations_; }  // bodies sent to another rank, whole run

@@ -94,7 +94,7 @@ TEST(CoupledScene, RestartIsBitwiseAtTheSameRankCount) {
   MPI_Barrier(MPI_COMM_WORLD);
   run_on(2, kShort, kDir + "/second", kDir + "/resume.h5");
   if (world_rank() != 0) return;
-  for (const char* name : {"liquid_fraction", "velocity", "pressure"}) {
+  for (const char* name : {"liquid_fraction", "liquid_content", "velocity", "pressure"}) {
     const auto a = dataset(kDir + "/straight/checkpoint.h5", name), b = dataset(kDir + "/second/checkpoint.h5", name);
     ASSERT_EQ(a.size(), b.size());
     long differ = 0;

@@ -119,7 +119,7 @@ TEST(SolidFraction, HoldsTheBodiesExactlyWithTheSameBitsOnAnyRankCount) {
   for (double tolerance : {0.0, 0.01}) {
     SolidPhase solid(flow.grid(), *rig.dem, 1000, tolerance);
     solid.update(*rig.dem);
-    const SolidPhaseStats st = solid.stats(flow);
+    const SolidPhaseStats st = solid.stats();
     const double v_body = rig.dem->shapes()[0].volume;
     EXPECT_NEAR(st.body_volume, 27 * v_body, 1e-15 * 27 * v_body);
     EXPECT_NEAR(st.solid_volume, st.body_volume, 1e-13 * st.body_volume);
