@@ -29,9 +29,15 @@ def grid_of(run_dir):
 
 
 def load(path):
+    # (z, y, x[, 3]). Coupled runs: the solid fraction, and the liquid content (liquid volume over the
+    # cell's, theory C7; runs before 2026-11-29 lack it: the liquid fraction times the fluid part).
     with h5py.File(path, 'r') as f:
         solid = np.array(f['solid_fraction']) if 'solid_fraction' in f else None
-        return (f.attrs['time'], np.array(f['liquid_fraction']), np.array(f['velocity']), solid)  # (z, y, x[, 3])
+        frac = np.array(f['liquid_fraction'])
+        content = np.array(f['liquid_content']) if 'liquid_content' in f else None
+        if solid is not None and content is None:
+            content = frac * (1 - np.clip(solid, 0, 1))
+        return f.attrs['time'], frac, np.array(f['velocity']), solid, content
 
 
 def plane(a, axis, index):
@@ -49,7 +55,7 @@ def slice_of(frac, vel, axis, index):
 
 def draw(ax, run_dir, path, axis, at, arrows, scale):
     origin, h = grid_of(run_dir)
-    t, frac, vel, solid = load(path)
+    t, frac, vel, solid, content = load(path)
     n = {'x': frac.shape[2], 'y': frac.shape[1], 'z': frac.shape[0]}[axis]
     a = 'xyz'.index(axis)
     index = n // 2 if at is None else int(np.clip((at - origin[a]) / h[a], 0, n - 1))
@@ -59,7 +65,7 @@ def draw(ax, run_dir, path, axis, at, arrows, scale):
         s2 = np.clip(plane(solid, axis, index), 0, 1)
         ax.imshow(np.ma.masked_less(s2, 0.02), origin='lower', extent=[e * 1e3 for e in extent], cmap='copper_r',
                   vmin=0, vmax=1.2, interpolation='nearest')
-        water = np.ma.masked_less(f2 * (1 - s2), 0.01)
+        water = np.ma.masked_less(plane(content, axis, index), 0.01)
         ax.imshow(water, origin='lower', extent=[e * 1e3 for e in extent], cmap='Blues', vmin=0, vmax=1,
                   interpolation='nearest', alpha=0.85)
     else:

@@ -58,8 +58,10 @@ struct PoreLiquidStats {
 class PoreLiquid {
  public:
   static constexpr double kMinFluidPart = 0.1;   // e_min: below it phi blends with the advected value
-  static constexpr double kTolerance = 1e-9;     // largest excess left by settle (of a cell)
-  static constexpr int kMaxPasses = 2000;
+  // Largest excess settle leaves (fraction of a cell), and its passes per step: what is left stays
+  // where it is (conserved; reported as the residual and as liquid_in_bodies) for the next step.
+  static constexpr double kTolerance = 1e-6;
+  static constexpr int kMaxPasses = 200;
 
   explicit PoreLiquid(const FluidGrid& grid);
 
