@@ -181,7 +181,7 @@ class FlowScene final : public SteppedScene {
   bool after_step(const RunOptions& opt) override;
   void write_snapshot() override;
   void write_checkpoint(const std::string& path) override {
-    if (coupled_)
+    if (coupled_ && coupled_->liquid_in_pores())
       write_flow_checkpoint(path, *flow_, {{"liquid_content", &coupled_->liquid().content()}});
     else
       write_flow_checkpoint(path, *flow_);
@@ -225,7 +225,9 @@ class FlowScene final : public SteppedScene {
   double pore_residual_max_ = 0;
   // The liquid volume: sum f V_c in the flow scene, the liquid content's sum in the coupled one (C7);
   // the part of it within the cells' fluid part (all of it, to the stage's tolerance).
-  double liquid_volume() const { return coupled_ ? coupled_->liquid().volume() : flow_->liquid_volume(); }
+  double liquid_volume() const {
+    return coupled_ && coupled_->liquid_in_pores() ? coupled_->liquid().volume() : flow_->liquid_volume();
+  }
   double free_liquid_volume() const {
     return liquid_volume() - coupled_->liquid().volume_in_bodies(coupled_->solid().fraction());
   }
@@ -449,7 +451,7 @@ void FlowScene::start(const RunOptions& opt) {
     if (crater_) crater_->start(*dem_);
   }
   coupled_ = std::make_unique<CoupledSolver>(*flow_, *dem_, coupling_);
-  if (opt.restart)
+  if (opt.restart && coupling_.liquid_in_pores)
     read_checkpoint_cell_field(*opt.restart, flow_->grid(), "liquid_content", coupled_->mutable_liquid().mutable_content(),
                                "the liquid in the cells' fluid part, theory C7; coupled checkpoints from 2026-11-29 on");
 }
@@ -466,7 +468,7 @@ void FlowScene::begin_output(const RunOptions& opt) {
   }
   if (coupled_) {
     coupled_->start(!opt.restart);  // a restart's velocities were corrected when saved
-    free_liquid0_ = free_liquid_volume();
+    if (coupled_->liquid_in_pores()) free_liquid0_ = free_liquid_volume();
   }
   volume0_ = liquid_volume();
   peak_speed_ = flow_->max_speed();
@@ -502,7 +504,7 @@ void FlowScene::begin_output(const RunOptions& opt) {
   fields_ = std::make_unique<FieldSeries>(opt.output_dir + "/fields");
   if (coupled_) {
     fields_->add_field("solid_fraction", &coupled_->solid().fraction());
-    fields_->add_field("liquid_content", &coupled_->liquid().content());
+    if (coupled_->liquid_in_pores()) fields_->add_field("liquid_content", &coupled_->liquid().content());
     bodies_out_ = std::make_unique<SnapshotSeries>(opt.output_dir + "/snapshots");
     if (crater_)
       crater_->open(opt.output_dir, opt.restart.has_value() && fs::exists(opt.output_dir + "/crater.csv"), root);
@@ -659,12 +661,14 @@ void FlowScene::summarise(nlohmann::json& s) {
   s["quantities"]["body_volume"] = sp.body_volume;
   s["quantities"]["solid_volume_error"] = sp.body_volume > 0 ? (sp.solid_volume - sp.body_volume) / sp.body_volume : 0.0;
   s["quantities"]["max_solid_fraction"] = sp.max_fraction;
-  const double free = free_liquid_volume();
-  s["quantities"]["free_liquid_volume"] = free;
-  s["quantities"]["free_liquid_volume_drift"] = free_liquid0_ > 0 ? (free - free_liquid0_) / free_liquid0_ : 0.0;
-  s["quantities"]["liquid_in_bodies"] = volume - free;
-  s["quantities"]["pore_liquid_max_passes"] = pore_passes_max_;
-  s["quantities"]["pore_liquid_max_residual"] = pore_residual_max_;
+  if (coupled_->liquid_in_pores()) {
+    const double free = free_liquid_volume();
+    s["quantities"]["free_liquid_volume"] = free;
+    s["quantities"]["free_liquid_volume_drift"] = free_liquid0_ > 0 ? (free - free_liquid0_) / free_liquid0_ : 0.0;
+    s["quantities"]["liquid_in_bodies"] = volume - free;
+    s["quantities"]["pore_liquid_max_passes"] = pore_passes_max_;
+    s["quantities"]["pore_liquid_max_residual"] = pore_residual_max_;
+  }
   long layouts = coupled_->solid().layouts_computed();  // bodies laid out again (C1), all ranks
   MPI_Allreduce(MPI_IN_PLACE, &layouts, 1, MPI_LONG, MPI_SUM, decomp_->comm());
   s["coupling"] = {{"dem_stable_dt", coupled_->dem_stable_dt()},

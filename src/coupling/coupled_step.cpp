@@ -12,6 +12,7 @@ CouplingSettings CouplingSettings::from_config(const ConfigNode& c) {
   // Unknown keys are reported by Config::check_unused.
   if (c.has("substeps")) s.substeps = static_cast<int>(c.integer("substeps", 1, 1'000'000));
   s.fluid_force = c.flag("fluid_force", true);
+  s.liquid_in_pores = c.flag("liquid_in_pores", true);
   s.layout_tolerance = c.real("layout_tolerance", Dim::none, Range::closed(0, 0.25), s.layout_tolerance);
   return s;
 }
@@ -26,11 +27,13 @@ CoupledSolver::CoupledSolver(FlowSolver& flow, DemSolver& dem, CouplingSettings 
 void CoupledSolver::start(bool fresh) {
   solid_.update(dem_);
   if (!fresh) {
-    liquid_.resume(solid_.fraction());
+    if (settings_.liquid_in_pores) liquid_.resume(solid_.fraction());
     return;
   }
-  liquid_.start(flow_, solid_.fraction());
-  liquid_.settle(flow_, solid_.fraction());
+  if (settings_.liquid_in_pores) {
+    liquid_.start(flow_, solid_.fraction());
+    liquid_.settle(flow_, solid_.fraction());
+  }
   solid_.correct_velocity(flow_, dem_);
 }
 
@@ -45,9 +48,9 @@ CoupledStepStats CoupledSolver::step(double dt) {
   CoupledStepStats st;
   {
     auto t = timers_.scope("flow");
-    liquid_.before_flow(flow_);
+    if (settings_.liquid_in_pores) liquid_.before_flow(flow_);
     st.flow = flow_.advance(dt);
-    liquid_.after_flow(flow_);
+    if (settings_.liquid_in_pores) liquid_.after_flow(flow_);
   }
   if (settings_.fluid_force) {
     auto t = timers_.scope("fluid_force");
@@ -63,7 +66,7 @@ CoupledStepStats CoupledSolver::step(double dt) {
     auto t = timers_.scope("solid_fraction");
     solid_.update(dem_);
   }
-  {
+  if (settings_.liquid_in_pores) {
     auto t = timers_.scope("pore_liquid");
     liquid_.displace(solid_.moves(), dem_.particles().size(), [&](std::vector<double>& sums) {
       dem_.reverse_add_ghosts(sums, 2);

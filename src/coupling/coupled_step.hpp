@@ -28,6 +28,9 @@ struct CouplingSettings {
   std::optional<int> substeps;  // L; none: the least L with dt / L <= the DEM's own stable step
   bool fluid_force = true;      // off: the bodies move the flow, the flow does not push them
   double layout_tolerance = 0.01;  // fraction of the cell: lay-outs reused within it (SolidPhase)
+  // The liquid kept in the cells' fluid part (C7). Off: the liquid fraction is advected over whole
+  // cells, the bodies' insides included (the settling sphere, where C7 is not yet right: theory C7).
+  bool liquid_in_pores = true;
   static CouplingSettings from_config(const ConfigNode& coupling);
 };
 
@@ -54,6 +57,7 @@ class CoupledSolver {
 
   const SolidPhase& solid() const { return solid_; }
   const PoreLiquid& liquid() const { return liquid_; }
+  bool liquid_in_pores() const { return settings_.liquid_in_pores; }
   PoreLiquid& mutable_liquid() { return liquid_; }
   FlowSolver& flow() { return flow_; }
   DemSolver& dem() { return dem_; }

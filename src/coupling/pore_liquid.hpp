@@ -61,7 +61,7 @@ class PoreLiquid {
   // Largest excess settle leaves (fraction of a cell), and its passes per step: what is left stays
   // where it is (conserved; reported as the residual and as liquid_in_bodies) for the next step.
   static constexpr double kTolerance = 1e-6;
-  static constexpr int kMaxPasses = 200;
+  static constexpr int kMaxPasses = 20;
 
   explicit PoreLiquid(const FluidGrid& grid);
 
