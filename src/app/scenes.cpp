@@ -13,7 +13,8 @@ std::unique_ptr<DemScene> make_dem_scene(const ConfigNode& root, MPI_Comm comm, 
 }
 
 std::unique_ptr<Scene> make_scene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir) {
-  const std::string scene = root.choice("scene", {"deposition", "bed", "bunker_shot", "flow", "coupled"});
+  const std::string scene = root.choice("scene", {"deposition", "bed", "bunker_shot", "flow", "coupled", "blast"});
+  if (scene == "blast") return make_blast_scene(root, comm, case_dir);
   if (scene == "flow" || scene == "coupled") return make_flow_scene(root, comm, case_dir, scene == "coupled");
   return make_dem_scene(root, comm, case_dir);
 }

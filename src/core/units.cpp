@@ -33,6 +33,15 @@ constexpr std::array kUnits{
     UnitEntry{"GPa", Dim::pressure, 1e9},
     UnitEntry{"N/m", Dim::stiffness, 1.0},
     UnitEntry{"kN/m", Dim::stiffness, 1e3},
+    UnitEntry{"MN/m", Dim::stiffness, 1e6},
+    UnitEntry{"GN/m", Dim::stiffness, 1e9},
+    UnitEntry{"N/m^3", Dim::stiffness_per_area, 1.0},
+    UnitEntry{"MN/m^3", Dim::stiffness_per_area, 1e6},
+    UnitEntry{"GN/m^3", Dim::stiffness_per_area, 1e9},
+    UnitEntry{"N*s/m^3", Dim::damping_per_area, 1.0},
+    UnitEntry{"MN*s/m^3", Dim::damping_per_area, 1e6},
+    UnitEntry{"J/m^2", Dim::energy_per_area, 1.0},
+    UnitEntry{"N/m", Dim::energy_per_area, 1.0},
     UnitEntry{"m/s", Dim::velocity, 1.0},
     UnitEntry{"mm/s", Dim::velocity, 1e-3},
     UnitEntry{"m/s^2", Dim::acceleration, 1.0},
@@ -42,6 +51,7 @@ constexpr std::array kUnits{
     UnitEntry{"nJ", Dim::energy, 1e-9},
     UnitEntry{"N*s/m", Dim::damping, 1.0},
     UnitEntry{"N.s/m", Dim::damping, 1.0},
+    UnitEntry{"MN*s/m", Dim::damping, 1e6},
     UnitEntry{"1/s", Dim::rate, 1.0},
     UnitEntry{"rad/s", Dim::angular_velocity, 1.0},
     UnitEntry{"N*m", Dim::moment, 1.0},
@@ -90,6 +100,12 @@ const char* si_unit(Dim d) {
       return "kg*m^2";
     case Dim::viscosity:
       return "Pa*s";
+    case Dim::stiffness_per_area:
+      return "N/m^3";
+    case Dim::damping_per_area:
+      return "N*s/m^3";
+    case Dim::energy_per_area:
+      return "J/m^2";
   }
   return "?";
 }

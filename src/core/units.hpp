@@ -25,6 +25,9 @@ enum class Dim {
   moment,             // N m
   moment_of_inertia,  // kg m^2
   viscosity,          // Pa s (dynamic)
+  stiffness_per_area,  // N/m^3 (springs per unit area of a bonded face)
+  damping_per_area,    // N s/m^3
+  energy_per_area,     // J/m^2 (fracture energy)
 };
 
 const char* si_unit(Dim d);

@@ -37,6 +37,30 @@ struct Quaternion {
   Vec3 unrotate(const Vec3& v) const { return Quaternion{w, -x, -y, -z}.rotate(v); }
 };
 
+// The unit quaternion of a rotation matrix given by its columns (body axes in the world frame,
+// right-handed, orthonormal): Shepperd's method (largest diagonal term first, stable for any angle).
+inline Quaternion quaternion_from_axes(const Vec3& c0, const Vec3& c1, const Vec3& c2) {
+  const double m00 = c0.x, m10 = c0.y, m20 = c0.z, m01 = c1.x, m11 = c1.y, m21 = c1.z, m02 = c2.x, m12 = c2.y,
+               m22 = c2.z;
+  const double tr = m00 + m11 + m22;
+  Quaternion q;
+  if (tr >= m00 && tr >= m11 && tr >= m22) {
+    const double s = 2 * std::sqrt(1 + tr);
+    q = {0.25 * s, (m21 - m12) / s, (m02 - m20) / s, (m10 - m01) / s};
+  } else if (m00 >= m11 && m00 >= m22) {
+    const double s = 2 * std::sqrt(1 + m00 - m11 - m22);
+    q = {(m21 - m12) / s, 0.25 * s, (m01 + m10) / s, (m02 + m20) / s};
+  } else if (m11 >= m22) {
+    const double s = 2 * std::sqrt(1 + m11 - m00 - m22);
+    q = {(m02 - m20) / s, (m01 + m10) / s, 0.25 * s, (m12 + m21) / s};
+  } else {
+    const double s = 2 * std::sqrt(1 + m22 - m00 - m11);
+    q = {(m10 - m01) / s, (m02 + m20) / s, (m12 + m21) / s, 0.25 * s};
+  }
+  const double n = std::sqrt(q.norm2());
+  return {q.w / n, q.x / n, q.y / n, q.z / n};
+}
+
 // sin and cos; for |phi| < 1e-2 (every DEM step: w dt is ~1e-4) by their Taylor series, whose
 // truncation error (phi^10 / 10! < 3e-27) lies far below round-off: 3x cheaper than libm's sincos.
 inline void small_angle_sincos(double phi, double& s, double& c) {

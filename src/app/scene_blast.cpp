@@ -1,0 +1,377 @@
+// SPDX-License-Identifier: MIT
+// The blast scene (issue 17; docs/theory.md B1-B9): a block meshed into tetrahedra (Gmsh), bonded
+// on every shared face, fractured by the gas pressure in a borehole. Case keys: section `blast`
+// (mesh, density, bond, contact, borehole, time_step or stability_factor, probe_time,
+// process_grid), `run`, `output`. Output: DIR/elements_NNNNNN.h5 + DIR/elements.xmf (each element's
+// tetrahedron at its pose, with displacement, velocity, damage, broken faces and time-step level
+// per cell), checkpoints, summary.json.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iomanip>
+#include <sstream>
+
+#include "app/run_loop.hpp"
+#include "app/scenes.hpp"
+#include "core/errors.hpp"
+#include "core/h5_file.hpp"
+#include "core/text_file.hpp"
+#include "fracture/fracture_solver.hpp"
+
+namespace tessera {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+FractureSettings read_fracture_settings(const ConfigNode& blast) {
+  FractureSettings s;
+  s.density = blast.real("density", Dim::density, Range::positive(), 2390.0);
+  if (const auto b = blast.optional_section("bond")) {
+    BondLaw& l = s.bond;
+    l.kn = b->real("normal_stiffness", Dim::stiffness_per_area, Range::positive(), l.kn);
+    l.ks = b->real("shear_stiffness", Dim::stiffness_per_area, Range::positive(), l.ks);
+    l.cn = b->real("normal_damping", Dim::damping_per_area, Range::non_negative(), l.cn);
+    l.cs = b->real("shear_damping", Dim::damping_per_area, Range::non_negative(), l.cs);
+    l.cohesion = b->real("cohesion", Dim::pressure, Range::non_negative(), l.cohesion);
+    l.friction = b->real("friction", Dim::none, Range::non_negative(), l.friction);
+    l.tensile_strength = b->real("tensile_strength", Dim::pressure, Range::positive(), l.tensile_strength);
+    l.fracture_energy = b->real("fracture_energy", Dim::energy_per_area, Range::positive(), l.fracture_energy);
+  }
+  if (const auto c = blast.optional_section("contact")) {
+    s.contact_stiffness = c->real("stiffness", Dim::stiffness, Range::positive(), s.contact_stiffness);
+    s.contact_damping = c->real("damping", Dim::damping, Range::non_negative(), s.contact_damping);
+    s.contact_friction = c->real("friction", Dim::none, Range::non_negative(), s.contact_friction);
+    s.sphere_divisions = static_cast<int>(c->integer("sphere_divisions", 3, 20, s.sphere_divisions));
+  }
+  if (blast.has("time_step")) s.time_step = blast.real("time_step", Dim::time, Range::positive());
+  s.stability_factor = blast.real("stability_factor", Dim::none, Range::half_open(0, 1), s.stability_factor);
+  s.damping = blast.flag("damping", true);
+  return s;
+}
+
+std::optional<Borehole> read_borehole(const ConfigNode& blast) {
+  const auto h = blast.optional_section("borehole");
+  if (!h) return std::nullopt;
+  Borehole b;
+  b.centre = h->vec3("centre", Dim::length);
+  b.axis = h->vec3("axis", Dim::none, b.axis);
+  if (norm(b.axis) == 0) h->fail("axis", "a non-zero direction");
+  b.axis = b.axis / norm(b.axis);
+  b.radius = h->real("radius", Dim::length, Range::positive());
+  b.p0 = h->real("peak_pressure", Dim::pressure, Range::non_negative(), b.p0);
+  b.rise = h->real("rise_time", Dim::time, Range::positive(), b.rise);
+  b.fall = h->real("fall_ratio", Dim::none, Range::positive(), b.fall);
+  return b;
+}
+
+// The mesh's bounding box, a little enlarged, is the process grid's box.
+std::pair<Vec3, Vec3> bounding_box(const TetMesh& m) {
+  Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  for (const Vec3& p : m.nodes)
+    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], p[d]), hi[d] = std::max(hi[d], p[d]);
+  const Vec3 pad = (hi - lo) * 1e-3;
+  return {lo - pad, hi + pad};
+}
+
+class BlastScene final : public SteppedScene {
+ public:
+  BlastScene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir) {
+    const ConfigNode blast = root.section("blast");
+    const fs::path mesh_path(blast.text("mesh"));
+    mesh_file_ = mesh_path.is_absolute() ? mesh_path.string() : (fs::path(case_dir) / mesh_path).lexically_normal().string();
+    const TetMesh mesh = read_gmsh(mesh_file_);
+    const FractureSettings settings = read_fracture_settings(blast);
+    const auto hole = read_borehole(blast);
+    probe_time_ = blast.real("probe_time", Dim::time, Range::positive(), 5e-4);
+    std::array<int, 3> grid{0, 0, 0};
+    if (blast.has("process_grid")) {
+      const auto g = blast.integers("process_grid", 3, 0, 1 << 20);
+      grid = {int(g[0]), int(g[1]), int(g[2])};
+    }
+    const auto [lo, hi] = bounding_box(mesh);
+    decomp_ = std::make_unique<Decomposition>(comm, lo, hi, grid);
+    solver_ = std::make_unique<FractureSolver>(*decomp_, build_bonded_block(mesh, settings.density), settings, hole);
+    read_loop_keys(root, true);
+    // The probe: the element whose initial centroid is nearest the hole's axis (lowest index on a tie).
+    if (hole) {
+      double best = 1e300;
+      for (std::size_t e = 0; e < solver_->block().size(); ++e) {
+        const Vec3 d = solver_->block().x0[e] - hole->centre;
+        const double r = norm(d - hole->axis * dot(d, hole->axis));
+        if (r < best) best = r, probe_ = static_cast<long>(e);
+      }
+    }
+  }
+  const char* name() const override { return "blast"; }
+
+ protected:
+  const Decomposition& decomposition() const override { return *decomp_; }
+  double time() const override { return solver_->time(); }
+  long steps() const override { return solver_->steps(); }
+  double last_dt() const override { return solver_->steps() > 0 ? solver_->dt() : 0; }
+  PhaseTimers& phase_timers() override { return solver_->timers(); }
+
+  void start(const RunOptions& opt) override {
+    if (opt.restart) read_checkpoint(*opt.restart);
+    solver_->setup();
+    out_dir_ = opt.output_dir;
+  }
+
+  void begin_output(const RunOptions& opt) override {
+    if (decomp_->rank() == 0 && !opt.quiet) {
+      const BondedBlock& b = solver_->block();
+      std::printf("blast: %zu elements, %zu bonds, %zu hole faces, dt %.3g s, %d ranks\n", b.size(), b.bonds.size(),
+                  solver_->hole_faces().size(), solver_->dt(), decomp_->size());
+      std::fflush(stdout);
+    }
+    write_snapshot();
+  }
+
+  void step(const RunOptions&) override {
+    solver_->step();
+    if (!probed_ && probe_ >= 0 && solver_->time() >= probe_time_ - 0.5 * solver_->dt()) {
+      const auto e = static_cast<std::size_t>(probe_);
+      probe_displacement_ = norm(solver_->x()[e] - solver_->block().x0[e]);
+      probed_ = true;
+    }
+  }
+
+  bool after_step(const RunOptions&) override {
+    if (solver_->steps() % 1000 == 0) {
+      // Blow-up check (positions are replicated: every rank decides alike).
+      for (const Vec3& x : solver_->x())
+        if (!std::isfinite(x.x + x.y + x.z))
+          throw CollectiveRunError("blast: an element's position is not finite at step " +
+                                   std::to_string(solver_->steps()) + "; lower blast.stability_factor");
+    }
+    return false;
+  }
+
+  std::string progress() override {
+    char line[160];
+    std::snprintf(line, sizeof line, "broken faces %ld  contact pairs %zu  P %.3g MPa", solver_->broken_count(),
+                  solver_->pair_count(), solver_->borehole() ? solver_->borehole()->pressure(time()) / 1e6 : 0.0);
+    return line;
+  }
+
+  void write_snapshot() override;
+  void write_checkpoint(const std::string& path) override;
+  void summarise(nlohmann::json& s) override;
+
+ private:
+  void read_checkpoint(const std::string& path);
+  std::vector<double> element_damage() const;
+
+  std::unique_ptr<Decomposition> decomp_;
+  std::unique_ptr<FractureSolver> solver_;
+  std::string mesh_file_, out_dir_;
+  double probe_time_ = 5e-4, probe_displacement_ = 0;
+  long probe_ = -1;
+  bool probed_ = false;
+  struct Snapshot {
+    double time;
+    std::string file;
+  };
+  std::vector<Snapshot> snapshots_;
+};
+
+std::vector<double> BlastScene::element_damage() const {
+  const BondedBlock& b = solver_->block();
+  std::vector<double> damage(b.size(), 0.0);
+  for (std::size_t k = 0; k < b.bonds.size(); ++k) {
+    double d = 0;
+    if (solver_->broken()[k]) {
+      d = 1;
+    } else {
+      for (const BondVertex& s : solver_->bond_state()[k]) d = std::max(d, bond_damage(solver_->settings().bond, s));
+    }
+    for (int e : {b.bonds[k].master, b.bonds[k].slave})
+      damage[static_cast<std::size_t>(e)] = std::max(damage[static_cast<std::size_t>(e)], d);
+  }
+  return damage;
+}
+
+void BlastScene::write_snapshot() {
+  if (!snapshots_.empty() && snapshots_.back().time == time()) return;
+  solver_->sync_state();
+  MPI_Comm comm = decomp_->comm();
+  const bool root = decomp_->rank() == 0;
+  const BondedBlock& b = solver_->block();
+  const std::size_t n = root ? b.size() : 0;
+  char name[64];
+  std::snprintf(name, sizeof name, "elements_%06zu.h5", snapshots_.size());
+  if (root) fs::create_directories(out_dir_);
+  MPI_Barrier(comm);
+  {
+    H5File f = H5File::create(out_dir_ + "/" + name, comm);
+    std::vector<double> nodes, disp, vel, broken_faces(n, 0.0), level(n, 0.0);
+    std::vector<std::int64_t> tets;
+    for (std::size_t e = 0; e < n; ++e) {
+      for (int k = 0; k < 4; ++k) {
+        const Vec3 p = solver_->x()[e] + solver_->q()[e].rotate(b.vertices[e][k]);
+        nodes.insert(nodes.end(), {p.x, p.y, p.z});
+        tets.push_back(static_cast<std::int64_t>(4 * e + static_cast<std::size_t>(k)));
+      }
+      const Vec3 d = solver_->x()[e] - b.x0[e], v = solver_->v()[e];
+      disp.insert(disp.end(), {d.x, d.y, d.z});
+      vel.insert(vel.end(), {v.x, v.y, v.z});
+    }
+    for (std::size_t k = 0; root && k < b.bonds.size(); ++k)
+      if (solver_->broken()[k])
+        broken_faces[static_cast<std::size_t>(b.bonds[k].master)] += 1, broken_faces[static_cast<std::size_t>(b.bonds[k].slave)] += 1;
+    std::vector<double> damage = root ? element_damage() : std::vector<double>{};
+    f.write_rows("nodes", nodes.data(), 4 * n, 3);
+    f.write_rows("tetrahedra", tets.data(), n, 4);
+    f.write_rows("displacement", disp.data(), n, 3);
+    f.write_rows("velocity", vel.data(), n, 3);
+    f.write_rows("damage", damage.data(), n, 1);
+    f.write_rows("broken_faces", broken_faces.data(), n, 1);
+    f.write_rows("dt_level", level.data(), n, 1);
+    f.set_attribute("time", time());
+  }
+  snapshots_.push_back({time(), name});
+  if (!root) return;
+  const long N = static_cast<long>(b.size());
+  std::ostringstream grids;
+  grids << std::setprecision(17);
+  for (const Snapshot& s : snapshots_) {
+    auto item = [&](const char* ds, const char* type, int cols, long rows) {
+      std::ostringstream o;
+      o << "<DataItem Format=\"HDF\" NumberType=\"" << type << "\" Precision=\"8\" Dimensions=\"" << rows
+        << (cols > 1 ? " " + std::to_string(cols) : "") << "\">" << s.file << ":/" << ds << "</DataItem>";
+      return o.str();
+    };
+    grids << "   <Grid Name=\"elements\" GridType=\"Uniform\">\n    <Time Value=\"" << s.time << "\"/>\n"
+          << "    <Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"" << N << "\">"
+          << item("tetrahedra", "Int", 4, N) << "</Topology>\n"
+          << "    <Geometry GeometryType=\"XYZ\">" << item("nodes", "Float", 3, 4 * N) << "</Geometry>\n";
+    for (const char* v : {"displacement", "velocity"})
+      grids << "    <Attribute Name=\"" << v << "\" AttributeType=\"Vector\" Center=\"Cell\">"
+            << item(v, "Float", 3, N) << "</Attribute>\n";
+    for (const char* v : {"damage", "broken_faces", "dt_level"})
+      grids << "    <Attribute Name=\"" << v << "\" AttributeType=\"Scalar\" Center=\"Cell\">"
+            << item(v, "Float", 1, N) << "</Attribute>\n";
+    grids << "   </Grid>\n";
+  }
+  write_file_atomically(out_dir_ + "/elements.xmf",
+                        "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n  <Grid Name=\"blast\" "
+                        "GridType=\"Collection\" CollectionType=\"Temporal\">\n" +
+                            grids.str() + "  </Grid>\n </Domain>\n</Xdmf>\n");
+}
+
+void BlastScene::write_checkpoint(const std::string& path) {
+  solver_->sync_state();
+  MPI_Comm comm = decomp_->comm();
+  const bool root = decomp_->rank() == 0;
+  const BondedBlock& b = solver_->block();
+  const std::size_t n = root ? b.size() : 0, nb = root ? b.bonds.size() : 0;
+  std::vector<double> state, bonds;
+  for (std::size_t e = 0; e < n; ++e) {
+    const Vec3 &x = solver_->x()[e], &v = solver_->v()[e], &L = solver_->angular_momentum()[e];
+    const Quaternion& q = solver_->q()[e];
+    state.insert(state.end(), {x.x, x.y, x.z, q.w, q.x, q.y, q.z, v.x, v.y, v.z, L.x, L.y, L.z});
+  }
+  for (std::size_t k = 0; k < nb; ++k) {
+    for (const BondVertex& s : solver_->bond_state()[k]) bonds.insert(bonds.end(), {s.slip[0], s.slip[1], s.u_max});
+    bonds.push_back(solver_->broken()[k]);
+  }
+  const std::string tmp = path + ".tmp";
+  {
+    H5File f = H5File::create(tmp, comm);
+    f.write_rows("elements", state.data(), n, 13);
+    f.write_rows("bonds", bonds.data(), nb, 10);
+    f.set_attribute("time", time());
+    f.set_attribute("steps", steps());
+    f.set_attribute("probe_displacement", probe_displacement_);
+    f.set_attribute("probed", static_cast<long>(probed_));
+    f.set_attribute("mesh", mesh_file_);
+  }
+  MPI_Barrier(comm);
+  if (root) fs::rename(tmp, path);
+  MPI_Barrier(comm);
+}
+
+void BlastScene::read_checkpoint(const std::string& path) {
+  const H5File f = H5File::open_read(path, decomp_->comm());
+  int cols = 0;
+  const std::vector<double> state = f.read_all<double>("elements", cols);
+  const BondedBlock& b = solver_->block();
+  if (cols != 13 || state.size() != 13 * b.size())
+    throw InputError("restart", path, "a checkpoint of this case's mesh (" + std::to_string(b.size()) + " elements)");
+  const std::vector<double> bonds = f.read_all<double>("bonds", cols);
+  if (cols != 10 || bonds.size() != 10 * b.bonds.size())
+    throw InputError("restart", path, "a checkpoint of this case's mesh (" + std::to_string(b.bonds.size()) + " bonds)");
+  std::vector<Vec3> x(b.size()), v(b.size()), L(b.size());
+  std::vector<Quaternion> q(b.size());
+  for (std::size_t e = 0; e < b.size(); ++e) {
+    const double* s = &state[13 * e];
+    x[e] = {s[0], s[1], s[2]}, q[e] = {s[3], s[4], s[5], s[6]}, v[e] = {s[7], s[8], s[9]}, L[e] = {s[10], s[11], s[12]};
+  }
+  std::vector<std::array<BondVertex, 3>> bs(b.bonds.size());
+  std::vector<char> broken(b.bonds.size());
+  for (std::size_t k = 0; k < b.bonds.size(); ++k) {
+    const double* s = &bonds[10 * k];
+    for (std::size_t j = 0; j < 3; ++j) bs[k][j].slip[0] = s[3 * j], bs[k][j].slip[1] = s[3 * j + 1], bs[k][j].u_max = s[3 * j + 2];
+    broken[k] = s[9] != 0;
+  }
+  solver_->restore(x, q, v, L, bs, broken);
+  solver_->set_clock(f.attribute_double("time"), f.attribute_long("steps"));
+  probe_displacement_ = f.attribute_double("probe_displacement");
+  probed_ = f.attribute_long("probed") != 0;
+}
+
+void BlastScene::summarise(nlohmann::json& s) {
+  solver_->sync_state();
+  const FractureEnergies en = solver_->energies();
+  const BondedBlock& b = solver_->block();
+  double crack_area = 0;
+  for (std::size_t k = 0; k < b.bonds.size(); ++k)
+    if (solver_->broken()[k]) crack_area += b.bonds[k].area;
+  long counts[3] = {solver_->element_steps(), solver_->bond_evaluations(), solver_->contact_evaluations()};
+  MPI_Allreduce(MPI_IN_PLACE, counts, 3, MPI_LONG, MPI_SUM, decomp_->comm());
+  // Per-rank time in contact work (bonds and sphere contacts), every rank's.
+  const double mine = solver_->timers().total("bond_forces") + solver_->timers().total("contact_forces");
+  std::vector<double> contact_time(static_cast<std::size_t>(decomp_->size()));
+  MPI_Allgather(&mine, 1, MPI_DOUBLE, contact_time.data(), 1, MPI_DOUBLE, decomp_->comm());
+  nlohmann::json q;
+  q["elements"] = b.size();
+  q["bonds"] = b.bonds.size();
+  q["broken_faces"] = solver_->broken_count();
+  q["crack_area"] = crack_area;
+  // Quasi-2D: the broken faces' area over the block's depth along the hole's axis.
+  if (solver_->borehole()) {
+    double lo = 1e300, hi = -1e300;
+    for (const Vec3& p : b.nodes) {
+      const double z = dot(p, solver_->borehole()->axis);
+      lo = std::min(lo, z), hi = std::max(hi, z);
+    }
+    q["crack_length"] = crack_area / (hi - lo);
+  }
+  q["kinetic_energy"] = en.kinetic;
+  q["bond_elastic_energy"] = en.bond_elastic;
+  q["contact_elastic_energy"] = en.contact_elastic;
+  if (probe_ >= 0) {
+    q["probe_element"] = probe_;
+    q["probe_time"] = probe_time_;
+    if (probed_) q["probe_displacement"] = probe_displacement_;
+  }
+  s["quantities"] = q;
+  s["dt"] = solver_->dt();
+  s["element_steps"] = counts[0];
+  s["bond_evaluations"] = counts[1];
+  s["contact_evaluations"] = counts[2];
+  s["contact_spheres"] = solver_->sphere_count();
+  s["contact_list_builds"] = solver_->list_builds();
+  s["contact_seconds_per_rank"] = contact_time;
+  s["output"] = {{"checkpoint", "checkpoint.h5"}, {"snapshots", snapshots_.empty() ? "" : "elements.xmf"}};
+}
+
+}  // namespace
+
+std::unique_ptr<Scene> make_blast_scene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir) {
+  return std::make_unique<BlastScene>(root, comm, case_dir);
+}
+
+}  // namespace tessera

@@ -1,0 +1,525 @@
+// SPDX-License-Identifier: MIT
+#include "fracture/fracture_solver.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <unordered_map>
+
+#include "core/errors.hpp"
+#include "core/exact_sum.hpp"
+
+namespace tessera {
+
+namespace {
+
+constexpr int kStateWidth = 13;     // x, q, v, w
+constexpr int kSyncWidth = 16;      // x, q, v, w, L
+constexpr int kBondWidth = 10;      // 3 x (slip xi, slip eta, u_max), broken
+
+}  // namespace
+
+double Borehole::pressure(double t) const {
+  constexpr double pi = std::numbers::pi;
+  if (t < 0) return 0;
+  if (t <= rise) {
+    const double c = std::cos(0.5 * pi * (t / rise - 1));
+    return p0 * c * c;
+  }
+  if (t <= (fall + 1) * rise) return p0 * std::cos(0.5 * pi / fall * (t / rise - 1));
+  return 0;
+}
+
+FractureSolver::FractureSolver(const Decomposition& decomp, BondedBlock block, FractureSettings settings,
+                               std::optional<Borehole> hole)
+    : decomp_(decomp), block_(std::move(block)), settings_(settings), hole_(hole) {
+  if (!settings_.bond.valid())
+    throw InputError("blast.bond.tensile_strength", std::to_string(settings_.bond.tensile_strength),
+                     "positive and below sqrt(2 G_f k_n) = " +
+                         std::to_string(std::sqrt(2 * settings_.bond.fracture_energy * settings_.bond.kn) / 1e6) +
+                         " MPa, so that the softening branch exists (docs/theory.md B4)");
+  const std::size_t n = block_.size();
+  owner_.resize(n);
+  owned_by_rank_.assign(static_cast<std::size_t>(decomp_.size()), {});
+  for (std::size_t e = 0; e < n; ++e) {
+    owner_[e] = decomp_.owner_rank(block_.x0[e]);
+    owned_by_rank_[static_cast<std::size_t>(owner_[e])].push_back(static_cast<int>(e));
+  }
+  x_ = block_.x0, q_ = block_.q0;
+  v_.assign(n, {}), w_.assign(n, {}), L_.assign(n, {}), F_.assign(n, {}), T_.assign(n, {});
+  bond_state_.assign(block_.bonds.size(), {});
+  broken_.assign(block_.bonds.size(), 0);
+  skin_ = 0.1 * block_.min_edge;
+  element_bonds_.assign(n, {});
+  for (std::size_t b = 0; b < block_.bonds.size(); ++b)
+    for (int e : {block_.bonds[b].master, block_.bonds[b].slave})
+      element_bonds_[static_cast<std::size_t>(e)].push_back(static_cast<int>(b));
+  add_surface_spheres();
+  if (hole_) {
+    // Faces on the hole: every node within 0.1 % of the radius from the axis, facing the axis.
+    for (std::size_t s = 0; s < block_.surface.size(); ++s) {
+      const SurfaceFace& f = block_.surface[s];
+      bool on = true;
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 d = block_.nodes[static_cast<std::size_t>(f.nodes[k])] - hole_->centre;
+        const double r = norm(d - hole_->axis * dot(d, hole_->axis));
+        on = on && std::fabs(r - hole_->radius) <= 1e-3 * hole_->radius;
+      }
+      if (!on) continue;
+      const std::size_t e = static_cast<std::size_t>(f.element);
+      const Vec3 c = block_.x0[e] + block_.q0[e].rotate(f.centroid_body) - hole_->centre;
+      const Vec3 radial = c - hole_->axis * dot(c, hole_->axis);
+      if (dot(block_.q0[e].rotate(f.normal_body), radial) < 0) hole_faces_.push_back(static_cast<int>(s));
+    }
+    if (hole_faces_.empty()) throw InputError("blast.borehole", "", "a hole whose surface is made of mesh faces (none lies on it)");
+  }
+}
+
+double FractureSolver::stable_dt() const {
+  // B9: the stiffest an element can be held: every face bonded (k_n A) and pressed by all its
+  // contact spheres (n_s k_c), for translation and, with the faces' lever arms, for rotation.
+  const int d = settings_.sphere_divisions;
+  const double ns = (d - 1) * (d - 2) / 2.0;
+  double t = 1e300;
+  for (std::size_t e = 0; e < block_.size(); ++e) {
+    // About principal axis a a spring at r has the lever |e_a x r|^2 = |r|^2 - r_a^2.
+    double k = 0, k_rot[3] = {0, 0, 0};
+    for (int f = 0; f < 4; ++f) {
+      Vec3 n, c;
+      double a;
+      face_frame(block_, static_cast<int>(e), f, n, c, a);
+      const double kf = settings_.bond.kn * a + ns * settings_.contact_stiffness;
+      k += kf;
+      for (int ax = 0; ax < 3; ++ax) {
+        double arm2 = 0;
+        for (int j = 0; j < 3; ++j) {
+          const Vec3& r = block_.vertices[e][kFaceVertices[f][j]];
+          arm2 = std::max(arm2, norm2(r) - r[ax] * r[ax]);
+        }
+        k_rot[ax] += kf * arm2;
+      }
+    }
+    const Vec3& I = block_.inertia[e];
+    t = std::min({t, std::sqrt(block_.mass[e] / k), std::sqrt(I.x / k_rot[0]), std::sqrt(I.y / k_rot[1]),
+                  std::sqrt(I.z / k_rot[2])});
+  }
+  return settings_.stability_factor * t;
+}
+
+void FractureSolver::setup() {
+  dt_ = settings_.time_step ? *settings_.time_step : stable_dt();
+  for (std::size_t e = 0; e < block_.size(); ++e) {
+    const Vec3 Lb = q_[e].unrotate(L_[e]), &I = block_.inertia[e];
+    w_[e] = q_[e].rotate({Lb.x / I.x, Lb.y / I.y, Lb.z / I.z});
+  }
+  exchange();
+  compute_forces(time_);
+  share_broken();
+}
+
+void FractureSolver::set_velocity(std::size_t e, const Vec3& v, const Vec3& w) {
+  v_[e] = v;
+  const Vec3 wb = q_[e].unrotate(w);
+  const Vec3& I = block_.inertia[e];
+  L_[e] = q_[e].rotate({I.x * wb.x, I.y * wb.y, I.z * wb.z});
+  w_[e] = w;
+}
+
+void FractureSolver::set_position(std::size_t e, const Vec3& x) { x_[e] = x; }
+
+void FractureSolver::step() {
+  {
+    auto t = timers_.scope("kick_drift");
+    kick(0.5 * dt_);
+    drift();
+  }
+  {
+    auto t = timers_.scope("exchange");
+    exchange();
+  }
+  compute_forces(time_ + dt_);
+  {
+    auto t = timers_.scope("kick");
+    kick(0.5 * dt_);
+  }
+  {
+    auto t = timers_.scope("broken");
+    share_broken();
+  }
+  time_ += dt_;
+  ++steps_;
+  element_steps_ += static_cast<long>(owned_by_rank_[static_cast<std::size_t>(decomp_.rank())].size());
+}
+
+void FractureSolver::kick(double h) {
+  for (int e : owned_by_rank_[static_cast<std::size_t>(decomp_.rank())]) {
+    const std::size_t i = static_cast<std::size_t>(e);
+    v_[i] += F_[i] * (h / block_.mass[i]);
+    L_[i] += T_[i] * h;
+    const Vec3 Lb = q_[i].unrotate(L_[i]);
+    const Vec3& I = block_.inertia[i];
+    w_[i] = q_[i].rotate({Lb.x / I.x, Lb.y / I.y, Lb.z / I.z});
+  }
+}
+
+void FractureSolver::drift() {
+  for (int e : owned_by_rank_[static_cast<std::size_t>(decomp_.rank())]) {
+    const std::size_t i = static_cast<std::size_t>(e);
+    x_[i] += v_[i] * dt_;
+    Vec3 Lb = q_[i].unrotate(L_[i]);
+    const Vec3& I = block_.inertia[i];
+    free_rotation_step(q_[i], Lb, I, dt_);
+    L_[i] = q_[i].rotate(Lb);
+    w_[i] = q_[i].rotate({Lb.x / I.x, Lb.y / I.y, Lb.z / I.z});
+  }
+}
+
+// Every rank's owned states to every rank (Allgatherv of `width` values per element).
+namespace {
+template <class Pack, class Unpack>
+void all_gather_elements(MPI_Comm comm, int rank, const std::vector<std::vector<int>>& owned, int width, Pack pack,
+                         Unpack unpack) {
+  const int P = static_cast<int>(owned.size());
+  std::vector<int> counts(static_cast<std::size_t>(P)), displs(static_cast<std::size_t>(P));
+  int total = 0;
+  for (int r = 0; r < P; ++r) {
+    counts[static_cast<std::size_t>(r)] = width * static_cast<int>(owned[static_cast<std::size_t>(r)].size());
+    displs[static_cast<std::size_t>(r)] = total;
+    total += counts[static_cast<std::size_t>(r)];
+  }
+  std::vector<double> mine(static_cast<std::size_t>(counts[static_cast<std::size_t>(rank)]));
+  std::size_t k = 0;
+  for (int e : owned[static_cast<std::size_t>(rank)]) pack(e, &mine[k]), k += static_cast<std::size_t>(width);
+  std::vector<double> all(static_cast<std::size_t>(total));
+  MPI_Allgatherv(mine.data(), counts[static_cast<std::size_t>(rank)], MPI_DOUBLE, all.data(), counts.data(),
+                 displs.data(), MPI_DOUBLE, comm);
+  for (int r = 0; r < P; ++r) {
+    if (r == rank) continue;
+    std::size_t at = static_cast<std::size_t>(displs[static_cast<std::size_t>(r)]);
+    for (int e : owned[static_cast<std::size_t>(r)]) unpack(e, &all[at]), at += static_cast<std::size_t>(width);
+  }
+}
+}  // namespace
+
+void FractureSolver::exchange() {
+  if (decomp_.size() == 1) return;
+  all_gather_elements(
+      decomp_.comm(), decomp_.rank(), owned_by_rank_, kStateWidth,
+      [&](int e, double* o) {
+        const std::size_t i = static_cast<std::size_t>(e);
+        const Quaternion& q = q_[i];
+        const double s[kStateWidth] = {x_[i].x, x_[i].y, x_[i].z, q.w, q.x, q.y, q.z,
+                                       v_[i].x, v_[i].y, v_[i].z, w_[i].x, w_[i].y, w_[i].z};
+        std::copy(s, s + kStateWidth, o);
+      },
+      [&](int e, const double* s) {
+        const std::size_t i = static_cast<std::size_t>(e);
+        x_[i] = {s[0], s[1], s[2]}, q_[i] = {s[3], s[4], s[5], s[6]};
+        v_[i] = {s[7], s[8], s[9]}, w_[i] = {s[10], s[11], s[12]};
+      });
+}
+
+void FractureSolver::sync_state() {
+  if (decomp_.size() == 1) return;
+  all_gather_elements(
+      decomp_.comm(), decomp_.rank(), owned_by_rank_, kSyncWidth,
+      [&](int e, double* o) {
+        const std::size_t i = static_cast<std::size_t>(e);
+        const Quaternion& q = q_[i];
+        const double s[kSyncWidth] = {x_[i].x, x_[i].y, x_[i].z, q.w,     q.x,     q.y,     q.z,     v_[i].x,
+                                      v_[i].y, v_[i].z, w_[i].x, w_[i].y, w_[i].z, L_[i].x, L_[i].y, L_[i].z};
+        std::copy(s, s + kSyncWidth, o);
+      },
+      [&](int e, const double* s) {
+        const std::size_t i = static_cast<std::size_t>(e);
+        x_[i] = {s[0], s[1], s[2]}, q_[i] = {s[3], s[4], s[5], s[6]};
+        v_[i] = {s[7], s[8], s[9]}, w_[i] = {s[10], s[11], s[12]}, L_[i] = {s[13], s[14], s[15]};
+      });
+  // Bonds: the master's owner holds the current state.
+  std::vector<std::vector<int>> bonds_by_rank(static_cast<std::size_t>(decomp_.size()));
+  for (std::size_t b = 0; b < block_.bonds.size(); ++b)
+    bonds_by_rank[static_cast<std::size_t>(owner_[static_cast<std::size_t>(block_.bonds[b].master)])].push_back(
+        static_cast<int>(b));
+  all_gather_elements(
+      decomp_.comm(), decomp_.rank(), bonds_by_rank, kBondWidth,
+      [&](int b, double* o) {
+        const auto& s = bond_state_[static_cast<std::size_t>(b)];
+        for (int k = 0; k < 3; ++k) o[3 * k] = s[k].slip[0], o[3 * k + 1] = s[k].slip[1], o[3 * k + 2] = s[k].u_max;
+        o[9] = broken_[static_cast<std::size_t>(b)];
+      },
+      [&](int b, const double* o) {
+        auto& s = bond_state_[static_cast<std::size_t>(b)];
+        for (int k = 0; k < 3; ++k) s[k].slip[0] = o[3 * k], s[k].slip[1] = o[3 * k + 1], s[k].u_max = o[3 * k + 2];
+      });
+}
+
+void FractureSolver::restore(const std::vector<Vec3>& x, const std::vector<Quaternion>& q, const std::vector<Vec3>& v,
+                             const std::vector<Vec3>& L, const std::vector<std::array<BondVertex, 3>>& bonds,
+                             const std::vector<char>& broken) {
+  x_ = x, q_ = q, v_ = v, L_ = L, bond_state_ = bonds;
+  spheres_.clear(), pairs_.clear();
+  add_surface_spheres();
+  broken_.assign(block_.bonds.size(), 0);
+  for (std::size_t b = 0; b < broken.size(); ++b)
+    if (broken[b]) broken_[b] = 1, add_spheres(static_cast<int>(b));
+}
+
+void FractureSolver::compute_forces(double time) {
+  for (int e : owned_by_rank_[static_cast<std::size_t>(decomp_.rank())])
+    F_[static_cast<std::size_t>(e)] = {}, T_[static_cast<std::size_t>(e)] = {};
+  {
+    auto t = timers_.scope("bond_forces");
+    bond_forces();
+  }
+  {
+    auto t = timers_.scope("contact_forces");
+    contact_forces();
+  }
+  {
+    auto t = timers_.scope("borehole");
+    borehole_forces(time);
+  }
+}
+
+void FractureSolver::bond_forces() {
+  const BondLaw& law = settings_.bond;
+  const double cn = settings_.damping ? law.cn : 0, cs = settings_.damping ? law.cs : 0;
+  const double uf = law.u_failure();
+  const int rank = decomp_.rank();
+  newly_broken_.clear();
+  for (std::size_t b = 0; b < block_.bonds.size(); ++b) {
+    if (broken_[b]) continue;
+    const BondGeometry& g = block_.bonds[b];
+    const std::size_t i = static_cast<std::size_t>(g.master), j = static_cast<std::size_t>(g.slave);
+    const bool own_i = owner_[i] == rank, own_j = owner_[j] == rank;
+    if (!own_i && !own_j) continue;
+    ++bond_evaluations_;
+    const Vec3 n = q_[i].rotate(g.normal), xi = q_[i].rotate(g.xi), eta = q_[i].rotate(g.eta);
+    const double share = g.area / 3;
+    bool failed = false;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 ri = q_[i].rotate(g.at_master[k]), rj = q_[j].rotate(g.at_slave[k]);
+      const Vec3 u = (x_[j] + rj) - (x_[i] + ri);
+      const Vec3 du = (v_[j] + cross(w_[j], rj)) - (v_[i] + cross(w_[i], ri));
+      const double un = dot(u, n);
+      const double ut[2] = {dot(u, xi), dot(u, eta)};
+      BondVertex& s = bond_state_[b][static_cast<std::size_t>(k)];
+      const double sigma = bond_normal_stress(law, s, un);
+      double tau[2];
+      bond_shear_stress(law, s, ut, sigma, tau);
+      const double dun = dot(du, n);
+      const Vec3 dut = du - n * dun;
+      const Vec3 F = (n * (sigma + cn * dun) + xi * tau[0] + eta * tau[1] + dut * cs) * (-share);
+      if (own_j) F_[j] += F, T_[j] += cross(rj, F);
+      if (own_i) F_[i] -= F, T_[i] -= cross(ri, F);
+      failed = failed || un >= uf;
+    }
+    if (failed && own_i) newly_broken_.push_back(static_cast<int>(b));
+  }
+}
+
+void FractureSolver::share_broken() {
+  std::vector<int> all = newly_broken_;
+  if (decomp_.size() > 1) {
+    int mine = static_cast<int>(newly_broken_.size());
+    std::vector<int> counts(static_cast<std::size_t>(decomp_.size())), displs(counts.size());
+    MPI_Allgather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, decomp_.comm());
+    int total = 0;
+    for (std::size_t r = 0; r < counts.size(); ++r) displs[r] = total, total += counts[r];
+    if (total == 0) return;
+    all.resize(static_cast<std::size_t>(total));
+    MPI_Allgatherv(newly_broken_.data(), mine, MPI_INT, all.data(), counts.data(), displs.data(), MPI_INT,
+                   decomp_.comm());
+  }
+  std::sort(all.begin(), all.end());
+  for (int b : all) {
+    broken_[static_cast<std::size_t>(b)] = 1;
+    add_spheres(b);
+  }
+  newly_broken_.clear();
+}
+
+long FractureSolver::broken_count() const {
+  long n = 0;
+  for (char c : broken_) n += c;
+  return n;
+}
+
+void FractureSolver::add_spheres(int bond) {
+  const BondGeometry& g = block_.bonds[static_cast<std::size_t>(bond)];
+  const int d = settings_.sphere_divisions;
+  long key = static_cast<long>(bond) * (d - 1) * (d - 2);  // (bond, side, k): the canonical order
+  for (const auto& [e, f] : {std::pair{g.master, g.master_face}, std::pair{g.slave, g.slave_face}})
+    for (const FaceSphere& s : face_spheres(block_.vertices[static_cast<std::size_t>(e)], f, settings_.sphere_divisions)) {
+      spheres_.push_back({e, s.centre, s.radius, key++});
+      max_radius_ = std::max(max_radius_, s.radius);
+    }
+  spheres_added_ = true;
+}
+
+void FractureSolver::add_surface_spheres() {
+  // B6: the block's own surface (the hole's wall included) carries spheres from the start, so that
+  // fragments meet it; their keys follow every bond's.
+  const int d = settings_.sphere_divisions;
+  const long ns = (d - 1) * (d - 2) / 2;
+  for (std::size_t f = 0; f < block_.surface.size(); ++f) {
+    const SurfaceFace& sf = block_.surface[f];
+    long key = (2 * static_cast<long>(block_.bonds.size()) + static_cast<long>(f)) * ns;
+    for (const FaceSphere& s : face_spheres(block_.vertices[static_cast<std::size_t>(sf.element)], sf.face, d)) {
+      spheres_.push_back({sf.element, s.centre, s.radius, key++});
+      max_radius_ = std::max(max_radius_, s.radius);
+    }
+  }
+  spheres_added_ = true;
+}
+
+bool FractureSolver::bonded(int a, int b) const {
+  for (int k : element_bonds_[static_cast<std::size_t>(a)]) {
+    const BondGeometry& g = block_.bonds[static_cast<std::size_t>(k)];
+    if ((g.master == b || g.slave == b) && !broken_[static_cast<std::size_t>(k)]) return true;
+  }
+  return false;
+}
+
+bool FractureSolver::list_stale() const {
+  if (spheres_added_) return true;
+  for (std::size_t s = 0; s < spheres_.size(); ++s) {
+    const std::size_t e = static_cast<std::size_t>(spheres_[s].element);
+    if (norm2(x_[e] + q_[e].rotate(spheres_[s].centre) - sphere_at_build_[s]) > 0.25 * skin_ * skin_) return true;
+  }
+  return false;
+}
+
+void FractureSolver::build_list() {
+  ++list_builds_;
+  spheres_added_ = false;
+  pairs_.clear();
+  const std::size_t n = spheres_.size();
+  sphere_at_build_.resize(n);
+  for (std::size_t s = 0; s < n; ++s) {
+    const std::size_t e = static_cast<std::size_t>(spheres_[s].element);
+    sphere_at_build_[s] = x_[e] + q_[e].rotate(spheres_[s].centre);
+  }
+  const double cell = 2 * max_radius_ + skin_;
+  auto key = [&](long a, long b, long c) { return (a & 0x1FFFFF) | ((b & 0x1FFFFF) << 21) | ((c & 0x1FFFFF) << 42); };
+  auto coord = [&](double v) { return static_cast<long>(std::floor(v / cell)) + (1L << 20); };
+  std::unordered_map<long, std::vector<int>> cells;
+  for (std::size_t s = 0; s < n; ++s) {
+    const Vec3& p = sphere_at_build_[s];
+    cells[key(coord(p.x), coord(p.y), coord(p.z))].push_back(static_cast<int>(s));
+  }
+  const int rank = decomp_.rank();
+  for (std::size_t a = 0; a < n; ++a) {
+    const Vec3& p = sphere_at_build_[a];
+    const int ea = spheres_[a].element;
+    const long cx = coord(p.x), cy = coord(p.y), cz = coord(p.z);
+    for (long dx = -1; dx <= 1; ++dx)
+      for (long dy = -1; dy <= 1; ++dy)
+        for (long dz = -1; dz <= 1; ++dz) {
+          const auto it = cells.find(key(cx + dx, cy + dy, cz + dz));
+          if (it == cells.end()) continue;
+          for (int b : it->second) {
+            if (b <= static_cast<int>(a)) continue;
+            const int eb = spheres_[static_cast<std::size_t>(b)].element;
+            if (eb == ea || bonded(ea, eb)) continue;
+            if (owner_[static_cast<std::size_t>(ea)] != rank && owner_[static_cast<std::size_t>(eb)] != rank) continue;
+            const double reach = spheres_[a].radius + spheres_[static_cast<std::size_t>(b)].radius + skin_;
+            if (norm2(p - sphere_at_build_[static_cast<std::size_t>(b)]) < reach * reach) {
+              const bool first = spheres_[a].key < spheres_[static_cast<std::size_t>(b)].key;
+              pairs_.push_back(first ? std::pair{static_cast<int>(a), b} : std::pair{b, static_cast<int>(a)});
+            }
+          }
+        }
+  }
+  // Canonical order (sphere keys), whatever order the faces broke in or a restart re-created them.
+  std::sort(pairs_.begin(), pairs_.end(), [&](const auto& p, const auto& r) {
+    const auto& S = spheres_;
+    return std::pair{S[static_cast<std::size_t>(p.first)].key, S[static_cast<std::size_t>(p.second)].key} <
+           std::pair{S[static_cast<std::size_t>(r.first)].key, S[static_cast<std::size_t>(r.second)].key};
+  });
+}
+
+void FractureSolver::contact_forces() {
+  if (spheres_.empty()) return;
+  if (list_stale()) build_list();
+  const double k = settings_.contact_stiffness, c = settings_.damping ? settings_.contact_damping : 0;
+  const double mu = settings_.contact_friction;
+  const int rank = decomp_.rank();
+  for (const auto& [a, b] : pairs_) {
+    const Sphere &sa = spheres_[static_cast<std::size_t>(a)], &sb = spheres_[static_cast<std::size_t>(b)];
+    const std::size_t ea = static_cast<std::size_t>(sa.element), eb = static_cast<std::size_t>(sb.element);
+    const Vec3 pa = x_[ea] + q_[ea].rotate(sa.centre), pb = x_[eb] + q_[eb].rotate(sb.centre);
+    const Vec3 d = pa - pb;
+    const double dist = norm(d), overlap = sa.radius + sb.radius - dist;
+    ++contact_evaluations_;
+    if (overlap <= 0 || dist == 0) continue;
+    const Vec3 n = d / dist;
+    const Vec3 cp = pb + n * (sb.radius - 0.5 * overlap);
+    const Vec3 arm_a = cp - x_[ea], arm_b = cp - x_[eb];
+    const Vec3 vrel = (v_[ea] + cross(w_[ea], arm_a)) - (v_[eb] + cross(w_[eb], arm_b));
+    const double vn = dot(vrel, n);
+    // B7: the dashpot and the friction, each as backward Euler on the isolated pair (reduced mass
+    // m*): c / (1 + c dt / m*) tends to c as dt -> 0, and neither can reverse the pair's relative
+    // velocity within a step (Table 1's dashpot is ~200 times critical: explicit, it needs
+    // dt < 2 m / c, 1e-8 s for a 5 cm element).
+    const double m_pair = block_.mass[ea] * block_.mass[eb] / (block_.mass[ea] + block_.mass[eb]);
+    const double c_eff = c / (1 + c * dt_ / m_pair);
+    const double fn = std::max(0.0, k * overlap - c_eff * vn);
+    Vec3 F = n * fn;
+    const Vec3 vt = vrel - n * vn;
+    const double st = norm(vt);
+    if (st > 0) F -= vt * (std::min(mu * fn, m_pair * st / dt_) / st);
+    if (owner_[ea] == rank) F_[ea] += F, T_[ea] += cross(arm_a, F);
+    if (owner_[eb] == rank) F_[eb] -= F, T_[eb] -= cross(arm_b, F);
+  }
+}
+
+void FractureSolver::borehole_forces(double t) {
+  if (!hole_) return;
+  const double p = hole_->pressure(t);
+  if (p == 0) return;
+  const int rank = decomp_.rank();
+  for (int s : hole_faces_) {
+    const SurfaceFace& f = block_.surface[static_cast<std::size_t>(s)];
+    const std::size_t e = static_cast<std::size_t>(f.element);
+    if (owner_[e] != rank) continue;
+    const Vec3 arm = q_[e].rotate(f.centroid_body);
+    const Vec3 F = q_[e].rotate(f.normal_body) * (-p * f.area);
+    F_[e] += F, T_[e] += cross(arm, F);
+  }
+}
+
+FractureEnergies FractureSolver::energies() const {
+  const int rank = decomp_.rank();
+  ExactSum kin, bond, contact;
+  for (int e : owned_by_rank_[static_cast<std::size_t>(rank)]) {
+    const std::size_t i = static_cast<std::size_t>(e);
+    kin += 0.5 * block_.mass[i] * norm2(v_[i]) + 0.5 * dot(L_[i], w_[i]);
+  }
+  const BondLaw& law = settings_.bond;
+  for (std::size_t b = 0; b < block_.bonds.size(); ++b) {
+    const BondGeometry& g = block_.bonds[b];
+    const std::size_t i = static_cast<std::size_t>(g.master), j = static_cast<std::size_t>(g.slave);
+    if (broken_[b] || owner_[i] != rank) continue;
+    const Vec3 n = q_[i].rotate(g.normal), xi = q_[i].rotate(g.xi), eta = q_[i].rotate(g.eta);
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 u = (x_[j] + q_[j].rotate(g.at_slave[k])) - (x_[i] + q_[i].rotate(g.at_master[k]));
+      const BondVertex& s = bond_state_[b][static_cast<std::size_t>(k)];
+      const double un = dot(u, n), d0 = dot(u, xi) - s.slip[0], d1 = dot(u, eta) - s.slip[1];
+      bond += g.area / 3 * 0.5 * (law.kn * un * un + law.ks * (d0 * d0 + d1 * d1));
+    }
+  }
+  for (const auto& [a, b] : pairs_) {
+    const Sphere &sa = spheres_[static_cast<std::size_t>(a)], &sb = spheres_[static_cast<std::size_t>(b)];
+    const std::size_t ea = static_cast<std::size_t>(sa.element), eb = static_cast<std::size_t>(sb.element);
+    if (owner_[ea] != rank) continue;  // each pair once: by the owner of its first sphere's element
+    const double overlap =
+        sa.radius + sb.radius - norm(x_[ea] + q_[ea].rotate(sa.centre) - x_[eb] - q_[eb].rotate(sb.centre));
+    if (overlap > 0) contact += 0.5 * settings_.contact_stiffness * overlap * overlap;
+  }
+  std::array<ExactSum, 3> sums{kin, bond, contact};
+  ExactSum::all_reduce(sums, decomp_.comm());
+  return {sums[0].value(), sums[1].value(), sums[2].value()};
+}
+
+}  // namespace tessera

@@ -1,0 +1,160 @@
+// SPDX-License-Identifier: MIT
+// Bonded tetrahedra that fracture (the blast seed; docs/theory.md B1-B9). One step is the ordered
+// list of stages below; timers use the same names.
+//
+//   kick_drift      owned elements: v += dt/2 F/m, L += dt/2 T; x += dt v; free rotation (T9)
+//   exchange        every rank gets every element's x, q, v, w (replicated state, section below)
+//   bond_forces     intact bonds touching an owned element (B2-B5), in bond order
+//   contact_forces  contact spheres of broken faces and of the block's surface (B6-B7), between
+//                   elements not bonded to each other: list rebuilt when faces break or a sphere
+//                   moved more than skin/2; pairs in key order
+//   borehole        the gas pressure P(t) on the hole's faces (B8)
+//   kick            v += dt/2 F/m, L += dt/2 T
+//   broken          faces released this step are made known to every rank
+//
+// Parallel (the seed's own scheme, section 3.2, on a spatial partition): every rank holds every
+// element's state; an element belongs to the rank whose sub-box of the process grid holds its
+// initial centroid, which integrates it. A bond or a contact is evaluated by each rank owning one of
+// its two elements (a pair across ranks twice, with the same inputs and so the same bits), and an
+// element sums its forces in bond order, then contact order, then the hole: the results do not
+// depend on the rank count. The states travel by one all-gather per step (13 values per element):
+// enough for the seed's mesh; a halo of only the elements a rank touches is the way to large meshes.
+#pragma once
+#include <mpi.h>
+
+#include <optional>
+#include <vector>
+
+#include "core/decomposition.hpp"
+#include "core/timers.hpp"
+#include "fracture/bond_law.hpp"
+#include "fracture/bonded_block.hpp"
+#include "fracture/face_spheres.hpp"
+
+namespace tessera {
+
+// The borehole's gas pressure (seed eq. 4, B8): a cos^2 rise over a, a cosine fall over b a.
+struct Borehole {
+  Vec3 centre{};             // a point on the axis
+  Vec3 axis{0, 0, 1};        // unit
+  double radius = 0.025;
+  double p0 = 5.75e8, rise = 1.33e-4, fall = 2.75;  // P0, a, b
+  double pressure(double t) const;
+};
+
+struct FractureSettings {
+  double density = 2390;
+  BondLaw bond;
+  double contact_stiffness = 1.5e9;  // post-fracture sphere contacts (B7), N/m
+  double contact_damping = 3.08e6;   // N s/m
+  double contact_friction = 0.58;    // sliding friction only
+  int sphere_divisions = 5;          // each broken face's edges divided in 5 (Fig. 5)
+  std::optional<double> time_step;   // none: stability_factor * the smallest element period (B9)
+  double stability_factor = 0.2;
+  bool damping = true;               // false: no dashpots (energy tests)
+};
+
+struct FractureEnergies {
+  double kinetic = 0, bond_elastic = 0, contact_elastic = 0;
+};
+
+class FractureSolver {
+ public:
+  FractureSolver(const Decomposition& decomp, BondedBlock block, FractureSettings settings,
+                 std::optional<Borehole> hole);
+
+  // Forces of the initial state; call once before stepping (or after a restart set the state).
+  void setup();
+  void step();
+
+  double time() const { return time_; }
+  long steps() const { return steps_; }
+  double dt() const { return dt_; }
+  void set_clock(double t, long steps) { time_ = t, steps_ = steps; }
+  const BondedBlock& block() const { return block_; }
+  const FractureSettings& settings() const { return settings_; }
+  const std::optional<Borehole>& borehole() const { return hole_; }
+  const std::vector<int>& hole_faces() const { return hole_faces_; }  // indices into block().surface
+  PhaseTimers& timers() { return timers_; }
+  const Decomposition& decomposition() const { return decomp_; }
+
+  // Element state (every rank holds all; x, q, v, w current everywhere after a step's exchange,
+  // velocities of the full step on the owner only until sync_state()).
+  const std::vector<Vec3>& x() const { return x_; }
+  const std::vector<Vec3>& v() const { return v_; }
+  const std::vector<Vec3>& w() const { return w_; }
+  const std::vector<Quaternion>& q() const { return q_; }
+  const std::vector<int>& owner() const { return owner_; }
+  bool owns(std::size_t e) const { return owner_[e] == decomp_.rank(); }
+  // Collective: every rank takes the owners' full state of elements and bonds (before output).
+  void sync_state();
+  // Sets an element's velocity (every rank alike; initial conditions and tests).
+  void set_velocity(std::size_t e, const Vec3& v, const Vec3& w);
+  void set_position(std::size_t e, const Vec3& x);
+
+  const std::vector<std::array<BondVertex, 3>>& bond_state() const { return bond_state_; }
+  const std::vector<char>& broken() const { return broken_; }
+  long broken_count() const;
+  // Collective. Restart: the full state (every rank passes the same arrays).
+  void restore(const std::vector<Vec3>& x, const std::vector<Quaternion>& q, const std::vector<Vec3>& v,
+               const std::vector<Vec3>& L, const std::vector<std::array<BondVertex, 3>>& bonds,
+               const std::vector<char>& broken);
+  const std::vector<Vec3>& angular_momentum() const { return L_; }
+
+  FractureEnergies energies() const;  // collective; bond energy of the elastic law (B2)
+  long contact_evaluations() const { return contact_evaluations_; }  // this rank, sphere pairs in range
+  long bond_evaluations() const { return bond_evaluations_; }
+  long element_steps() const { return element_steps_; }  // this rank
+  long list_builds() const { return list_builds_; }
+  std::size_t sphere_count() const { return spheres_.size(); }
+  std::size_t pair_count() const { return pairs_.size(); }
+  // The pressure force on the hole faces at the last evaluation, summed over the block.
+  const std::vector<Vec3>& force() const { return F_; }
+
+ private:
+  struct Sphere {
+    int element;
+    Vec3 centre;  // body frame
+    double radius;
+    long key;  // (bond, side, k)
+  };
+  void kick(double h);
+  void drift();
+  void exchange();
+  void compute_forces(double t);  // t: the time of the state (the hole's pressure)
+  void bond_forces();
+  void contact_forces();
+  void borehole_forces(double t);
+  void share_broken();
+  void add_spheres(int bond);
+  void add_surface_spheres();
+  bool list_stale() const;
+  // Two elements still joined by an intact bond: their spheres do not touch (the bond carries it).
+  bool bonded(int a, int b) const;
+  void build_list();
+  double stable_dt() const;
+
+  const Decomposition& decomp_;
+  BondedBlock block_;
+  FractureSettings settings_;
+  std::optional<Borehole> hole_;
+  std::vector<int> hole_faces_;
+  std::vector<int> owner_;
+  std::vector<std::vector<int>> element_bonds_;  // bonds of each element
+  std::vector<std::vector<int>> owned_by_rank_;
+  std::vector<Vec3> x_, v_, w_, L_, F_, T_;
+  std::vector<Quaternion> q_;
+  std::vector<std::array<BondVertex, 3>> bond_state_;
+  std::vector<char> broken_;
+  std::vector<int> newly_broken_;  // this step, bonds whose master this rank owns
+  std::vector<Sphere> spheres_;
+  std::vector<std::pair<int, int>> pairs_;
+  std::vector<Vec3> sphere_at_build_;
+  double max_radius_ = 0, skin_ = 0;
+  bool spheres_added_ = false;
+  double dt_ = 0, time_ = 0;
+  long steps_ = 0, contact_evaluations_ = 0, bond_evaluations_ = 0, element_steps_ = 0, list_builds_ = 0;
+  PhaseTimers timers_;
+};
+
+}  // namespace tessera
