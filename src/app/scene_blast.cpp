@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
 // The blast scene (issue 17; docs/theory.md B1-B9): a block meshed into tetrahedra (Gmsh), bonded
 // on every shared face, fractured by the gas pressure in a borehole. Case keys: section `blast`
-// (mesh, density, bond, contact, borehole, time_step or stability_factor, probe_time,
-// process_grid), `run`, `output`. Output: DIR/elements_NNNNNN.h5 + DIR/elements.xmf (each element's
+// (mesh, density, bond, contact, borehole, stepping, time_step, stability_factor, travel_limit,
+// max_level, damping, probe_time, process_grid), `run`, `output`. Output: DIR/elements_NNNNNN.h5 + DIR/elements.xmf (each element's
 // tetrahedron at its pose, with displacement, velocity, damage, broken faces and time-step level
 // per cell), checkpoints, summary.json.
 #include <algorithm>
@@ -48,6 +48,10 @@ FractureSettings read_fracture_settings(const ConfigNode& blast) {
   if (blast.has("time_step")) s.time_step = blast.real("time_step", Dim::time, Range::positive());
   s.stability_factor = blast.real("stability_factor", Dim::none, Range::half_open(0, 1), s.stability_factor);
   s.damping = blast.flag("damping", true);
+  const std::string stepping = blast.choice("stepping", {"uniform", "travel", "stability"}, "uniform");
+  s.stepping = stepping == "travel" ? Stepping::travel : (stepping == "stability" ? Stepping::stability : Stepping::uniform);
+  s.travel_limit = blast.real("travel_limit", Dim::length, Range::positive(), s.travel_limit);
+  s.max_level = static_cast<int>(blast.integer("max_level", 0, 40, s.max_level));
   return s;
 }
 
@@ -207,6 +211,7 @@ void BlastScene::write_snapshot() {
   {
     H5File f = H5File::create(out_dir_ + "/" + name, comm);
     std::vector<double> nodes, disp, vel, broken_faces(n, 0.0), level(n, 0.0);
+    for (std::size_t e = 0; e < n; ++e) level[e] = solver_->levels().empty() ? 0.0 : solver_->levels()[e];
     std::vector<std::int64_t> tets;
     for (std::size_t e = 0; e < n; ++e) {
       for (int k = 0; k < 4; ++k) {
@@ -359,6 +364,10 @@ void BlastScene::summarise(nlohmann::json& s) {
   }
   s["quantities"] = q;
   s["dt"] = solver_->dt();
+  if (solver_->settings().stepping != Stepping::uniform) {
+    s["smallest_dt"] = solver_->min_dt();
+    s["smallest_dt_time"] = solver_->min_dt_time();
+  }
   s["element_steps"] = counts[0];
   s["bond_evaluations"] = counts[1];
   s["contact_evaluations"] = counts[2];

@@ -13,7 +13,7 @@ namespace tessera {
 
 namespace {
 
-constexpr int kStateWidth = 13;     // x, q, v, w
+constexpr int kStateWidth = 14;     // x, q, v, w, the element's clock
 constexpr int kSyncWidth = 16;      // x, q, v, w, L
 constexpr int kBondWidth = 10;      // 3 x (slip xi, slip eta, u_max), broken
 
@@ -75,39 +75,58 @@ FractureSolver::FractureSolver(const Decomposition& decomp, BondedBlock block, F
   }
 }
 
-double FractureSolver::stable_dt() const {
+double FractureSolver::element_limit(std::size_t e) const {
   // B9: the stiffest an element can be held: every face bonded (k_n A) and pressed by all its
-  // contact spheres (n_s k_c), for translation and, with the faces' lever arms, for rotation.
+  // contact spheres (n_s k_c), for translation and, about each principal axis a (a spring at r has
+  // the lever |e_a x r|^2 = |r|^2 - r_a^2), for rotation: 1 / (the largest angular frequency).
   const int d = settings_.sphere_divisions;
   const double ns = (d - 1) * (d - 2) / 2.0;
-  double t = 1e300;
-  for (std::size_t e = 0; e < block_.size(); ++e) {
-    // About principal axis a a spring at r has the lever |e_a x r|^2 = |r|^2 - r_a^2.
-    double k = 0, k_rot[3] = {0, 0, 0};
-    for (int f = 0; f < 4; ++f) {
-      Vec3 n, c;
-      double a;
-      face_frame(block_, static_cast<int>(e), f, n, c, a);
-      const double kf = settings_.bond.kn * a + ns * settings_.contact_stiffness;
-      k += kf;
-      for (int ax = 0; ax < 3; ++ax) {
-        double arm2 = 0;
-        for (int j = 0; j < 3; ++j) {
-          const Vec3& r = block_.vertices[e][kFaceVertices[f][j]];
-          arm2 = std::max(arm2, norm2(r) - r[ax] * r[ax]);
-        }
-        k_rot[ax] += kf * arm2;
+  double k = 0, k_rot[3] = {0, 0, 0};
+  for (int f = 0; f < 4; ++f) {
+    Vec3 n, c;
+    double a;
+    face_frame(block_, static_cast<int>(e), f, n, c, a);
+    const double kf = settings_.bond.kn * a + ns * settings_.contact_stiffness;
+    k += kf;
+    for (int ax = 0; ax < 3; ++ax) {
+      double arm2 = 0;
+      for (int j = 0; j < 3; ++j) {
+        const Vec3& r = block_.vertices[e][kFaceVertices[f][j]];
+        arm2 = std::max(arm2, norm2(r) - r[ax] * r[ax]);
       }
+      k_rot[ax] += kf * arm2;
     }
-    const Vec3& I = block_.inertia[e];
-    t = std::min({t, std::sqrt(block_.mass[e] / k), std::sqrt(I.x / k_rot[0]), std::sqrt(I.y / k_rot[1]),
-                  std::sqrt(I.z / k_rot[2])});
   }
+  const Vec3& I = block_.inertia[e];
+  return std::min({std::sqrt(block_.mass[e] / k), std::sqrt(I.x / k_rot[0]), std::sqrt(I.y / k_rot[1]),
+                   std::sqrt(I.z / k_rot[2])});
+}
+
+double FractureSolver::stable_dt() const {
+  double t = 1e300;
+  for (std::size_t e = 0; e < block_.size(); ++e) t = std::min(t, element_limit(e));
   return settings_.stability_factor * t;
 }
 
 void FractureSolver::setup() {
+  const std::size_t n = block_.size();
   dt_ = settings_.time_step ? *settings_.time_step : stable_dt();
+  if (settings_.stepping == Stepping::stability) {
+    // The macro step: the largest element's stable step (unless set); each element's level from its own.
+    std::vector<double> limit(n);
+    double largest = 0;
+    for (std::size_t e = 0; e < n; ++e) limit[e] = settings_.stability_factor * element_limit(e), largest = std::max(largest, limit[e]);
+    if (!settings_.time_step) dt_ = largest;
+    stable_level_.assign(n, 0);
+    for (std::size_t e = 0; e < n; ++e) {
+      int k = 0;
+      while (k < settings_.max_level && std::ldexp(dt_, -k) > limit[e]) ++k;
+      stable_level_[e] = k;
+    }
+  }
+  level_.assign(n, 0);
+  t_el_.assign(n, time_);
+  S_.assign(n, {}), A_.assign(n, {});
   for (std::size_t e = 0; e < block_.size(); ++e) {
     const Vec3 Lb = q_[e].unrotate(L_[e]), &I = block_.inertia[e];
     w_[e] = q_[e].rotate({Lb.x / I.x, Lb.y / I.y, Lb.z / I.z});
@@ -128,6 +147,7 @@ void FractureSolver::set_velocity(std::size_t e, const Vec3& v, const Vec3& w) {
 void FractureSolver::set_position(std::size_t e, const Vec3& x) { x_[e] = x; }
 
 void FractureSolver::step() {
+  if (settings_.stepping != Stepping::uniform) return multirate_step();
   {
     auto t = timers_.scope("kick_drift");
     kick(0.5 * dt_);
@@ -202,20 +222,23 @@ void all_gather_elements(MPI_Comm comm, int rank, const std::vector<std::vector<
 }  // namespace
 
 void FractureSolver::exchange() {
-  if (decomp_.size() == 1) return;
+  if (decomp_.size() > 1) exchange_elements(owned_by_rank_);
+}
+
+void FractureSolver::exchange_elements(const std::vector<std::vector<int>>& lists) {
   all_gather_elements(
-      decomp_.comm(), decomp_.rank(), owned_by_rank_, kStateWidth,
+      decomp_.comm(), decomp_.rank(), lists, kStateWidth,
       [&](int e, double* o) {
         const std::size_t i = static_cast<std::size_t>(e);
         const Quaternion& q = q_[i];
-        const double s[kStateWidth] = {x_[i].x, x_[i].y, x_[i].z, q.w, q.x, q.y, q.z,
-                                       v_[i].x, v_[i].y, v_[i].z, w_[i].x, w_[i].y, w_[i].z};
+        const double s[kStateWidth] = {x_[i].x, x_[i].y, x_[i].z, q.w,     q.x,     q.y,     q.z,
+                                       v_[i].x, v_[i].y, v_[i].z, w_[i].x, w_[i].y, w_[i].z, t_el_[i]};
         std::copy(s, s + kStateWidth, o);
       },
       [&](int e, const double* s) {
         const std::size_t i = static_cast<std::size_t>(e);
         x_[i] = {s[0], s[1], s[2]}, q_[i] = {s[3], s[4], s[5], s[6]};
-        v_[i] = {s[7], s[8], s[9]}, w_[i] = {s[10], s[11], s[12]};
+        v_[i] = {s[7], s[8], s[9]}, w_[i] = {s[10], s[11], s[12]}, t_el_[i] = s[13];
       });
 }
 
@@ -281,10 +304,36 @@ void FractureSolver::compute_forces(double time) {
   }
 }
 
-void FractureSolver::bond_forces() {
+PairForce FractureSolver::bond_force(std::size_t b, const Pose& pi, const Pose& pj, double h) {
   const BondLaw& law = settings_.bond;
   const double cn = settings_.damping ? law.cn : 0, cs = settings_.damping ? law.cs : 0;
-  const double uf = law.u_failure();
+  const BondGeometry& g = block_.bonds[b];
+  const Vec3 n = pi.q.rotate(g.normal), xi = pi.q.rotate(g.xi), eta = pi.q.rotate(g.eta);
+  const double share = g.area / 3;
+  PairForce out;
+  (void)h;
+  for (int k = 0; k < 3; ++k) {
+    const Vec3 ri = pi.q.rotate(g.at_master[k]), rj = pj.q.rotate(g.at_slave[k]);
+    const Vec3 u = (pj.x + rj) - (pi.x + ri);
+    const Vec3 du = (pj.v + cross(pj.w, rj)) - (pi.v + cross(pi.w, ri));
+    const double un = dot(u, n);
+    const double ut[2] = {dot(u, xi), dot(u, eta)};
+    BondVertex& s = bond_state_[b][static_cast<std::size_t>(k)];
+    const double sigma = bond_normal_stress(law, s, un);
+    double tau[2];
+    bond_shear_stress(law, s, ut, sigma, tau);
+    const double dun = dot(du, n);
+    const Vec3 dut = du - n * dun;
+    const Vec3 F = (n * (sigma + cn * dun) + xi * tau[0] + eta * tau[1] + dut * cs) * (-share);
+    out.force += F;
+    out.torque_j += cross(rj, F);
+    out.torque_i -= cross(ri, F);
+    out.failed = out.failed || un >= law.u_failure();
+  }
+  return out;
+}
+
+void FractureSolver::bond_forces() {
   const int rank = decomp_.rank();
   newly_broken_.clear();
   for (std::size_t b = 0; b < block_.bonds.size(); ++b) {
@@ -294,27 +343,10 @@ void FractureSolver::bond_forces() {
     const bool own_i = owner_[i] == rank, own_j = owner_[j] == rank;
     if (!own_i && !own_j) continue;
     ++bond_evaluations_;
-    const Vec3 n = q_[i].rotate(g.normal), xi = q_[i].rotate(g.xi), eta = q_[i].rotate(g.eta);
-    const double share = g.area / 3;
-    bool failed = false;
-    for (int k = 0; k < 3; ++k) {
-      const Vec3 ri = q_[i].rotate(g.at_master[k]), rj = q_[j].rotate(g.at_slave[k]);
-      const Vec3 u = (x_[j] + rj) - (x_[i] + ri);
-      const Vec3 du = (v_[j] + cross(w_[j], rj)) - (v_[i] + cross(w_[i], ri));
-      const double un = dot(u, n);
-      const double ut[2] = {dot(u, xi), dot(u, eta)};
-      BondVertex& s = bond_state_[b][static_cast<std::size_t>(k)];
-      const double sigma = bond_normal_stress(law, s, un);
-      double tau[2];
-      bond_shear_stress(law, s, ut, sigma, tau);
-      const double dun = dot(du, n);
-      const Vec3 dut = du - n * dun;
-      const Vec3 F = (n * (sigma + cn * dun) + xi * tau[0] + eta * tau[1] + dut * cs) * (-share);
-      if (own_j) F_[j] += F, T_[j] += cross(rj, F);
-      if (own_i) F_[i] -= F, T_[i] -= cross(ri, F);
-      failed = failed || un >= uf;
-    }
-    if (failed && own_i) newly_broken_.push_back(static_cast<int>(b));
+    const PairForce f = bond_force(b, pose(i), pose(j), dt_);
+    if (own_j) F_[j] += f.force, T_[j] += f.torque_j;
+    if (own_i) F_[i] -= f.force, T_[i] += f.torque_i;
+    if (f.failed && own_i) newly_broken_.push_back(static_cast<int>(b));
   }
 }
 
@@ -381,11 +413,13 @@ bool FractureSolver::bonded(int a, int b) const {
   return false;
 }
 
-bool FractureSolver::list_stale() const {
+bool FractureSolver::list_stale(double ahead) const {
   if (spheres_added_) return true;
+  const double limit = 0.5 * skin_ - ahead;
+  if (limit <= 0) return true;
   for (std::size_t s = 0; s < spheres_.size(); ++s) {
     const std::size_t e = static_cast<std::size_t>(spheres_[s].element);
-    if (norm2(x_[e] + q_[e].rotate(spheres_[s].centre) - sphere_at_build_[s]) > 0.25 * skin_ * skin_) return true;
+    if (norm2(x_[e] + q_[e].rotate(spheres_[s].centre) - sphere_at_build_[s]) > limit * limit) return true;
   }
   return false;
 }
@@ -439,38 +473,49 @@ void FractureSolver::build_list() {
   });
 }
 
+PairForce FractureSolver::contact_force(std::size_t pair, const Pose& pa, const Pose& pb, double h) {
+  const auto [a, b] = pairs_[pair];
+  const Sphere &sa = spheres_[static_cast<std::size_t>(a)], &sb = spheres_[static_cast<std::size_t>(b)];
+  const std::size_t ea = static_cast<std::size_t>(sa.element), eb = static_cast<std::size_t>(sb.element);
+  PairForce out;
+  const Vec3 ca = pa.x + pa.q.rotate(sa.centre), cb = pb.x + pb.q.rotate(sb.centre);
+  const Vec3 d = ca - cb;
+  const double dist = norm(d), overlap = sa.radius + sb.radius - dist;
+  if (overlap <= 0 || dist == 0) return out;
+  const double k = settings_.contact_stiffness, c = settings_.damping ? settings_.contact_damping : 0;
+  const Vec3 n = d / dist;
+  const Vec3 cp = cb + n * (sb.radius - 0.5 * overlap);
+  const Vec3 arm_a = cp - pa.x, arm_b = cp - pb.x;
+  const Vec3 vrel = (pa.v + cross(pa.w, arm_a)) - (pb.v + cross(pb.w, arm_b));
+  const double vn = dot(vrel, n);
+  // B7: the dashpot and the friction, each as backward Euler on the isolated pair (reduced mass
+  // m*, over the pair's step h): c / (1 + c h / m*) tends to c as h -> 0, and neither can reverse
+  // the pair's relative velocity within a step (Table 1's dashpot is ~200 times critical:
+  // explicit, it needs h < 2 m / c, 1e-8 s for a 5 cm element).
+  const double m_pair = block_.mass[ea] * block_.mass[eb] / (block_.mass[ea] + block_.mass[eb]);
+  const double c_eff = c / (1 + c * h / m_pair);
+  const double fn = std::max(0.0, k * overlap - c_eff * vn);
+  Vec3 F = n * fn;
+  const Vec3 vt = vrel - n * vn;
+  const double st = norm(vt);
+  if (st > 0) F -= vt * (std::min(settings_.contact_friction * fn, m_pair * st / h) / st);
+  out.force = F;  // on a; -F on b
+  out.torque_j = cross(arm_a, F);
+  out.torque_i = -cross(arm_b, F);
+  return out;
+}
+
 void FractureSolver::contact_forces() {
   if (spheres_.empty()) return;
-  if (list_stale()) build_list();
-  const double k = settings_.contact_stiffness, c = settings_.damping ? settings_.contact_damping : 0;
-  const double mu = settings_.contact_friction;
+  if (list_stale(0)) build_list();
   const int rank = decomp_.rank();
-  for (const auto& [a, b] : pairs_) {
-    const Sphere &sa = spheres_[static_cast<std::size_t>(a)], &sb = spheres_[static_cast<std::size_t>(b)];
-    const std::size_t ea = static_cast<std::size_t>(sa.element), eb = static_cast<std::size_t>(sb.element);
-    const Vec3 pa = x_[ea] + q_[ea].rotate(sa.centre), pb = x_[eb] + q_[eb].rotate(sb.centre);
-    const Vec3 d = pa - pb;
-    const double dist = norm(d), overlap = sa.radius + sb.radius - dist;
+  for (std::size_t p = 0; p < pairs_.size(); ++p) {
+    const std::size_t ea = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(pairs_[p].first)].element);
+    const std::size_t eb = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(pairs_[p].second)].element);
     ++contact_evaluations_;
-    if (overlap <= 0 || dist == 0) continue;
-    const Vec3 n = d / dist;
-    const Vec3 cp = pb + n * (sb.radius - 0.5 * overlap);
-    const Vec3 arm_a = cp - x_[ea], arm_b = cp - x_[eb];
-    const Vec3 vrel = (v_[ea] + cross(w_[ea], arm_a)) - (v_[eb] + cross(w_[eb], arm_b));
-    const double vn = dot(vrel, n);
-    // B7: the dashpot and the friction, each as backward Euler on the isolated pair (reduced mass
-    // m*): c / (1 + c dt / m*) tends to c as dt -> 0, and neither can reverse the pair's relative
-    // velocity within a step (Table 1's dashpot is ~200 times critical: explicit, it needs
-    // dt < 2 m / c, 1e-8 s for a 5 cm element).
-    const double m_pair = block_.mass[ea] * block_.mass[eb] / (block_.mass[ea] + block_.mass[eb]);
-    const double c_eff = c / (1 + c * dt_ / m_pair);
-    const double fn = std::max(0.0, k * overlap - c_eff * vn);
-    Vec3 F = n * fn;
-    const Vec3 vt = vrel - n * vn;
-    const double st = norm(vt);
-    if (st > 0) F -= vt * (std::min(mu * fn, m_pair * st / dt_) / st);
-    if (owner_[ea] == rank) F_[ea] += F, T_[ea] += cross(arm_a, F);
-    if (owner_[eb] == rank) F_[eb] -= F, T_[eb] -= cross(arm_b, F);
+    const PairForce f = contact_force(p, pose(ea), pose(eb), dt_);
+    if (owner_[ea] == rank) F_[ea] += f.force, T_[ea] += f.torque_j;
+    if (owner_[eb] == rank) F_[eb] -= f.force, T_[eb] += f.torque_i;
   }
 }
 

@@ -42,6 +42,10 @@ struct Borehole {
   double pressure(double t) const;
 };
 
+// Time integration (B9, B10): one step for all elements (velocity Verlet), or per-element levels
+// dt0 / 2^k with shared impulses, chosen by the seed's travel limit or by each element's stability.
+enum class Stepping { uniform, travel, stability };
+
 struct FractureSettings {
   double density = 2390;
   BondLaw bond;
@@ -51,7 +55,17 @@ struct FractureSettings {
   int sphere_divisions = 5;          // each broken face's edges divided in 5 (Fig. 5)
   std::optional<double> time_step;   // none: stability_factor * the smallest element period (B9)
   double stability_factor = 0.2;
+  Stepping stepping = Stepping::uniform;
+  double travel_limit = 1e-8;        // l: |v| dt <= l (travel levels)
+  int max_level = 30;
   bool damping = true;               // false: no dashpots (energy tests)
+};
+
+// A pair's force: on the second element (the slave; contact: sphere a's element) `force`, on the
+// first minus it; the torques about each element's centroid.
+struct PairForce {
+  Vec3 force{}, torque_j{}, torque_i{};
+  bool failed = false;  // bonds: a vertex reached u_f
 };
 
 struct FractureEnergies {
@@ -69,7 +83,10 @@ class FractureSolver {
 
   double time() const { return time_; }
   long steps() const { return steps_; }
-  double dt() const { return dt_; }
+  double dt() const { return dt_; }  // the step (per-element levels: the macro step dt0)
+  const std::vector<int>& levels() const { return level_; }  // per-element levels of the last macro step
+  double min_dt() const { return min_dt_; }                   // the smallest sub-step so far, and when
+  double min_dt_time() const { return min_dt_time_; }
   void set_clock(double t, long steps) { time_ = t, steps_ = steps; }
   const BondedBlock& block() const { return block_; }
   const FractureSettings& settings() const { return settings_; }
@@ -112,6 +129,10 @@ class FractureSolver {
   const std::vector<Vec3>& force() const { return F_; }
 
  private:
+  struct Pose {
+    Vec3 x, v, w;
+    Quaternion q;
+  };
   struct Sphere {
     int element;
     Vec3 centre;  // body frame
@@ -121,14 +142,26 @@ class FractureSolver {
   void kick(double h);
   void drift();
   void exchange();
+  void exchange_elements(const std::vector<std::vector<int>>& lists);  // x, q, v, w, clock of each list's rank
+  double element_limit(std::size_t e) const;
+  Pose pose_at(std::size_t e, double t) const;  // on its piecewise-linear path (B10)
+  void assign_levels();
+  void advance_to(std::size_t e, double t);  // drift (x, q) from its clock to t
+  void kick_impulse(std::size_t e);          // v += S / m, L += A
+  void multirate_step();
   void compute_forces(double t);  // t: the time of the state (the hole's pressure)
+  Pose pose(std::size_t e) const { return {x_[e], v_[e], w_[e], q_[e]}; }
+  // B2-B5 on bond b (updates its state) and B7 on contact pair p, over a step h (the dashpots).
+  PairForce bond_force(std::size_t b, const Pose& master, const Pose& slave, double h);
+  PairForce contact_force(std::size_t p, const Pose& a, const Pose& b, double h);
   void bond_forces();
   void contact_forces();
   void borehole_forces(double t);
   void share_broken();
   void add_spheres(int bond);
   void add_surface_spheres();
-  bool list_stale() const;
+  // True when a sphere may have come within reach of one not listed (moved > skin/2 - ahead).
+  bool list_stale(double ahead) const;
   // Two elements still joined by an intact bond: their spheres do not touch (the bond carries it).
   bool bonded(int a, int b) const;
   void build_list();
@@ -152,7 +185,10 @@ class FractureSolver {
   std::vector<Vec3> sphere_at_build_;
   double max_radius_ = 0, skin_ = 0;
   bool spheres_added_ = false;
-  double dt_ = 0, time_ = 0;
+  double dt_ = 0, time_ = 0, min_dt_ = 1e300, min_dt_time_ = 0;
+  std::vector<int> level_, stable_level_;
+  std::vector<double> t_el_;      // each element's clock (its x, q are of that time)
+  std::vector<Vec3> S_, A_;       // impulse and angular impulse since its last update
   long steps_ = 0, contact_evaluations_ = 0, bond_evaluations_ = 0, element_steps_ = 0, list_builds_ = 0;
   PhaseTimers timers_;
 };

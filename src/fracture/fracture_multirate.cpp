@@ -1,0 +1,240 @@
+// SPDX-License-Identifier: MIT
+// Per-element time steps with shared impulses (the seed's section 3.1, eq. 3; docs/theory.md B10).
+//
+// A macro step dt0 is cut into 2^K sub-steps of dt0 / 2^K. Element e has a level k_e and a step
+// h_e = dt0 / 2^k_e: it is due at the sub-steps that are multiples of h_e. Its trajectory is
+// piecewise linear: x(t) = x_e + v_e (t - t_e) between its updates (t_e its last one), turning at
+// w_e. A pair (bond or contact) is evaluated whenever its finer element is due (level max(k_i, k_j),
+// step h_p = min(h_i, h_j)), at both elements' positions at that time, and its impulse F h_p is
+// added to both elements' sums S (equal and opposite: momentum is conserved to round-off). A due
+// element then takes its sum, v <- v + S / m (eq. 3; L <- L + the angular impulse), and drifts over
+// h_e (T9 for the rotation). With a single level this is the symplectic Euler (leapfrog) step.
+//
+// Two ways to apply the impulses:
+//   travel     (the seed, scheme b) a due element takes the sum of the impulses of its last step;
+//   stability  (scheme c) an element takes each impulse when it is made (the asynchronous
+//              variational integrator of Lew, Marsden, Ortiz & West 2003: momentum-conserving and
+//              symplectic), so a coarse element bonded to a fine one follows it without lag.
+// Levels are chosen at each macro step, when every element is due:
+//   travel     the seed's rule: the smallest k with |v_e| dt0 / 2^k <= l (l = blast.travel_limit)
+//   stability  each element's own stable step (B9: its faces' springs and its mass and inertia)
+//              times blast.stability_factor, rounded down to dt0 / 2^k
+// Faces that fail are released at once on the ranks that evaluate them and made known to all at
+// the end of the macro step (their contact spheres join then). Every rank knows every element's
+// level, so the states of the due elements travel in one all-gather per sub-step without counts.
+#include <algorithm>
+#include <bit>
+#include <cmath>
+
+#include "fracture/fracture_solver.hpp"
+
+namespace tessera {
+
+FractureSolver::Pose FractureSolver::pose_at(std::size_t e, double t) const {
+  if (t == t_el_[e]) return pose(e);
+  const double h = t - t_el_[e];
+  Pose p = pose(e);
+  p.x = x_[e] + v_[e] * h;
+  const double wn = norm(w_[e]);
+  if (wn > 0) {
+    double s, c;
+    small_angle_sincos(0.5 * wn * h, s, c);
+    const Vec3 a = w_[e] * (s / wn);
+    p.q = Quaternion{c, a.x, a.y, a.z} * q_[e];
+  }
+  return p;
+}
+
+void FractureSolver::advance_to(std::size_t i, double t) {
+  const double h = t - t_el_[i];
+  if (h > 0) {
+    x_[i] += v_[i] * h;
+    Vec3 Lb = q_[i].unrotate(L_[i]);
+    free_rotation_step(q_[i], Lb, block_.inertia[i], h);
+    L_[i] = q_[i].rotate(Lb);
+  }
+  t_el_[i] = t;
+  const Vec3 Lb = q_[i].unrotate(L_[i]), &I = block_.inertia[i];
+  w_[i] = q_[i].rotate({Lb.x / I.x, Lb.y / I.y, Lb.z / I.z});
+}
+
+void FractureSolver::kick_impulse(std::size_t i) {
+  v_[i] += S_[i] / block_.mass[i];
+  L_[i] += A_[i];
+  S_[i] = {}, A_[i] = {};
+  const Vec3 Lb = q_[i].unrotate(L_[i]), &I = block_.inertia[i];
+  w_[i] = q_[i].rotate({Lb.x / I.x, Lb.y / I.y, Lb.z / I.z});
+}
+
+void FractureSolver::assign_levels() {
+  const std::size_t n = block_.size();
+  level_.assign(n, 0);
+  for (std::size_t e = 0; e < n; ++e) {
+    int k = 0;
+    if (settings_.stepping == Stepping::travel) {
+      const double speed = norm(v_[e]);
+      while (k < settings_.max_level && speed * dt_ / std::ldexp(1.0, k) > settings_.travel_limit) ++k;
+    } else {
+      k = stable_level_[e];
+    }
+    level_[e] = k;
+  }
+}
+
+void FractureSolver::multirate_step() {
+  const int rank = decomp_.rank(), P = decomp_.size();
+  {
+    auto t = timers_.scope("levels");
+    assign_levels();
+  }
+  int K = 0;
+  for (int k : level_) K = std::max(K, k);
+  // Pairs by level (their finer element's); the list is checked with the macro step's travel ahead.
+  std::vector<std::vector<int>> bonds(static_cast<std::size_t>(K) + 1), contacts(static_cast<std::size_t>(K) + 1);
+  {
+    auto t = timers_.scope("contact_forces");
+    if (!spheres_.empty()) {
+      double vmax = 0;
+      for (std::size_t e = 0; e < block_.size(); ++e)
+        vmax = std::max(vmax, norm(v_[e]) + norm(w_[e]) * block_.max_edge);
+      if (list_stale(2 * vmax * dt_)) build_list();
+    }
+    for (std::size_t b = 0; b < block_.bonds.size(); ++b) {
+      const std::size_t i = static_cast<std::size_t>(block_.bonds[b].master), j = static_cast<std::size_t>(block_.bonds[b].slave);
+      if (broken_[b] || (owner_[i] != rank && owner_[j] != rank)) continue;
+      bonds[static_cast<std::size_t>(std::max(level_[i], level_[j]))].push_back(static_cast<int>(b));
+    }
+    for (std::size_t p = 0; p < pairs_.size(); ++p) {
+      const std::size_t a = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(pairs_[p].first)].element);
+      const std::size_t b = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(pairs_[p].second)].element);
+      contacts[static_cast<std::size_t>(std::max(level_[a], level_[b]))].push_back(static_cast<int>(p));
+    }
+  }
+  // Immediate impulses (stability levels): an element is kicked whenever one of its pairs is
+  // evaluated, so it is updated at its finest pair's level; every rank learns these levels (one
+  // reduction per macro step) and with them which states travel at each sub-step.
+  const bool immediate = settings_.stepping == Stepping::stability;
+  std::vector<int> kick_level = level_;
+  if (immediate) {
+    for (std::size_t b = 0; b < block_.bonds.size(); ++b) {
+      if (broken_[b]) continue;
+      const std::size_t i = static_cast<std::size_t>(block_.bonds[b].master), j = static_cast<std::size_t>(block_.bonds[b].slave);
+      const int k = std::max(level_[i], level_[j]);
+      kick_level[i] = std::max(kick_level[i], k), kick_level[j] = std::max(kick_level[j], k);
+    }
+    for (const auto& [sa, sb] : pairs_) {
+      const std::size_t i = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(sa)].element);
+      const std::size_t j = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(sb)].element);
+      const int k = std::max(level_[i], level_[j]);
+      kick_level[i] = std::max(kick_level[i], k), kick_level[j] = std::max(kick_level[j], k);
+    }
+    if (P > 1) MPI_Allreduce(MPI_IN_PLACE, kick_level.data(), static_cast<int>(kick_level.size()), MPI_INT, MPI_MAX, decomp_.comm());
+  }
+  // Elements by owner and the level at which they are updated (every rank builds the same table).
+  std::vector<std::vector<std::vector<int>>> by_level(static_cast<std::size_t>(P),
+                                                      std::vector<std::vector<int>>(static_cast<std::size_t>(K) + 1));
+  for (std::size_t e = 0; e < block_.size(); ++e)
+    by_level[static_cast<std::size_t>(owner_[e])][static_cast<std::size_t>(kick_level[e])].push_back(static_cast<int>(e));
+
+  const long substeps = 1L << K;
+  const double h_min = dt_ / static_cast<double>(substeps);
+  min_dt_ = std::min(min_dt_, h_min);
+  if (h_min <= min_dt_) min_dt_time_ = time_;
+  newly_broken_.clear();
+  std::vector<std::vector<int>> due(static_cast<std::size_t>(P));
+  for (long s = 0; s < substeps; ++s) {
+    const double t = time_ + static_cast<double>(s) * h_min;
+    const int first = s == 0 ? 0 : K - std::countr_zero(static_cast<unsigned long>(s));
+    {
+      auto timer = timers_.scope("bond_forces");
+      for (int k = first; k <= K; ++k) {
+        const double h = std::ldexp(dt_, -k);
+        for (int b : bonds[static_cast<std::size_t>(k)]) {
+          if (broken_[static_cast<std::size_t>(b)]) continue;
+          const BondGeometry& g = block_.bonds[static_cast<std::size_t>(b)];
+          const std::size_t i = static_cast<std::size_t>(g.master), j = static_cast<std::size_t>(g.slave);
+          ++bond_evaluations_;
+          const PairForce f = bond_force(static_cast<std::size_t>(b), pose_at(i, t), pose_at(j, t), h);
+          if (owner_[j] == rank) S_[j] += f.force * h, A_[j] += f.torque_j * h;
+          if (owner_[i] == rank) S_[i] -= f.force * h, A_[i] += f.torque_i * h;
+          if (f.failed) {
+            broken_[static_cast<std::size_t>(b)] = 1;  // at once here; everywhere at the macro step's end
+            if (owner_[i] == rank) newly_broken_.push_back(b);
+          }
+        }
+      }
+    }
+    {
+      auto timer = timers_.scope("contact_forces");
+      for (int k = first; k <= K; ++k) {
+        const double h = std::ldexp(dt_, -k);
+        for (int p : contacts[static_cast<std::size_t>(k)]) {
+          const std::size_t a = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(pairs_[static_cast<std::size_t>(p)].first)].element);
+          const std::size_t b = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(pairs_[static_cast<std::size_t>(p)].second)].element);
+          ++contact_evaluations_;
+          const PairForce f = contact_force(static_cast<std::size_t>(p), pose_at(a, t), pose_at(b, t), h);
+          if (owner_[a] == rank) S_[a] += f.force * h, A_[a] += f.torque_j * h;
+          if (owner_[b] == rank) S_[b] -= f.force * h, A_[b] += f.torque_i * h;
+        }
+      }
+    }
+    {
+      auto timer = timers_.scope("borehole");
+      if (hole_) {
+        const double pressure = hole_->pressure(t);
+        for (int sf : hole_faces_) {
+          const SurfaceFace& f = block_.surface[static_cast<std::size_t>(sf)];
+          const std::size_t e = static_cast<std::size_t>(f.element);
+          if (owner_[e] != rank || level_[e] < first || pressure == 0) continue;
+          const double h = std::ldexp(dt_, -level_[e]);
+          const Vec3 arm = q_[e].rotate(f.centroid_body);
+          const Vec3 F = q_[e].rotate(f.normal_body) * (-pressure * f.area);
+          S_[e] += F * h, A_[e] += cross(arm, F) * h;
+        }
+      }
+    }
+    {
+      auto timer = timers_.scope("kick_drift");
+      for (int k = first; k <= K; ++k) {
+        const double h = std::ldexp(dt_, -k);
+        for (int e : by_level[static_cast<std::size_t>(rank)][static_cast<std::size_t>(k)]) {
+          const std::size_t i = static_cast<std::size_t>(e);
+          if (immediate) {
+            advance_to(i, t);  // drift to now, kick with what arrived now
+            kick_impulse(i);
+          } else {
+            kick_impulse(i);  // eq. 3: the impulses of the step that ends now, then the next drift
+            advance_to(i, t + h);
+            t_el_[i] = time_ + static_cast<double>(s + (1L << (K - k))) * h_min;  // as t is formed
+          }
+          ++element_steps_;
+        }
+      }
+    }
+    if (P > 1) {
+      auto timer = timers_.scope("exchange");
+      for (int r = 0; r < P; ++r) {
+        auto& d = due[static_cast<std::size_t>(r)];
+        d.clear();
+        for (int k = first; k <= K; ++k)
+          d.insert(d.end(), by_level[static_cast<std::size_t>(r)][static_cast<std::size_t>(k)].begin(),
+                   by_level[static_cast<std::size_t>(r)][static_cast<std::size_t>(k)].end());
+      }
+      exchange_elements(due);
+    }
+  }
+  time_ += dt_;
+  ++steps_;
+  if (immediate) {
+    // Everyone drifts to the macro step's end and the states travel once more.
+    for (int e : owned_by_rank_[static_cast<std::size_t>(rank)]) advance_to(static_cast<std::size_t>(e), time_);
+    std::fill(t_el_.begin(), t_el_.end(), time_);
+    if (P > 1) exchange_elements(owned_by_rank_);
+  }
+  // Every element is at the macro step's end: all clocks agree again (no rounding drift).
+  std::fill(t_el_.begin(), t_el_.end(), time_);
+  auto timer = timers_.scope("broken");
+  share_broken();
+}
+
+}  // namespace tessera
