@@ -119,7 +119,7 @@ class BlastScene final : public SteppedScene {
 
   void start(const RunOptions& opt) override {
     if (opt.restart) read_checkpoint(*opt.restart);
-    solver_->setup();
+    solver_->setup(!opt.restart);
     out_dir_ = opt.output_dir;
   }
 
@@ -276,16 +276,26 @@ void BlastScene::write_checkpoint(const std::string& path) {
   for (std::size_t e = 0; e < n; ++e) {
     const Vec3 &x = solver_->x()[e], &v = solver_->v()[e], &L = solver_->angular_momentum()[e];
     const Quaternion& q = solver_->q()[e];
-    state.insert(state.end(), {x.x, x.y, x.z, q.w, q.x, q.y, q.z, v.x, v.y, v.z, L.x, L.y, L.z});
+    const Vec3 &F = solver_->force()[e], &T = solver_->torque()[e];
+    state.insert(state.end(), {x.x, x.y, x.z, q.w, q.x, q.y, q.z, v.x, v.y, v.z, L.x, L.y, L.z, F.x, F.y, F.z, T.x,
+                               T.y, T.z});
   }
   for (std::size_t k = 0; k < nb; ++k) {
     for (const BondVertex& s : solver_->bond_state()[k]) bonds.insert(bonds.end(), {s.slip[0], s.slip[1], s.u_max});
     bonds.push_back(solver_->broken()[k]);
   }
+  const ContactListState list = solver_->contact_list_state();
+  std::vector<double> list_poses;
+  for (std::size_t e = 0; e < (list.stale ? 0 : n); ++e) {
+    const Vec3& x = list.x[e];
+    const Quaternion& q = list.q[e];
+    list_poses.insert(list_poses.end(), {x.x, x.y, x.z, q.w, q.x, q.y, q.z});
+  }
   const std::string tmp = path + ".tmp";
   {
     H5File f = H5File::create(tmp, comm);
-    f.write_rows("elements", state.data(), n, 13);
+    f.write_rows("elements", state.data(), n, 19);
+    f.write_rows("contact_list_poses", list_poses.data(), list_poses.size() / 7, 7);
     f.write_rows("bonds", bonds.data(), nb, 10);
     f.set_attribute("time", time());
     f.set_attribute("steps", steps());
@@ -303,16 +313,17 @@ void BlastScene::read_checkpoint(const std::string& path) {
   int cols = 0;
   const std::vector<double> state = f.read_all<double>("elements", cols);
   const BondedBlock& b = solver_->block();
-  if (cols != 13 || state.size() != 13 * b.size())
+  if (cols != 19 || state.size() != 19 * b.size())
     throw InputError("restart", path, "a checkpoint of this case's mesh (" + std::to_string(b.size()) + " elements)");
   const std::vector<double> bonds = f.read_all<double>("bonds", cols);
   if (cols != 10 || bonds.size() != 10 * b.bonds.size())
     throw InputError("restart", path, "a checkpoint of this case's mesh (" + std::to_string(b.bonds.size()) + " bonds)");
-  std::vector<Vec3> x(b.size()), v(b.size()), L(b.size());
+  std::vector<Vec3> x(b.size()), v(b.size()), L(b.size()), F(b.size()), T(b.size());
   std::vector<Quaternion> q(b.size());
   for (std::size_t e = 0; e < b.size(); ++e) {
-    const double* s = &state[13 * e];
+    const double* s = &state[19 * e];
     x[e] = {s[0], s[1], s[2]}, q[e] = {s[3], s[4], s[5], s[6]}, v[e] = {s[7], s[8], s[9]}, L[e] = {s[10], s[11], s[12]};
+    F[e] = {s[13], s[14], s[15]}, T[e] = {s[16], s[17], s[18]};
   }
   std::vector<std::array<BondVertex, 3>> bs(b.bonds.size());
   std::vector<char> broken(b.bonds.size());
@@ -321,7 +332,19 @@ void BlastScene::read_checkpoint(const std::string& path) {
     for (std::size_t j = 0; j < 3; ++j) bs[k][j].slip[0] = s[3 * j], bs[k][j].slip[1] = s[3 * j + 1], bs[k][j].u_max = s[3 * j + 2];
     broken[k] = s[9] != 0;
   }
-  solver_->restore(x, q, v, L, bs, broken);
+  ContactListState list;
+  if (f.has("contact_list_poses")) {
+    const std::vector<double> poses = f.read_all<double>("contact_list_poses", cols);
+    if (cols == 7 && poses.size() == 7 * b.size()) {
+      list.stale = false;
+      for (std::size_t e = 0; e < b.size(); ++e) {
+        const double* s = &poses[7 * e];
+        list.x.push_back({s[0], s[1], s[2]});
+        list.q.push_back({s[3], s[4], s[5], s[6]});
+      }
+    }
+  }
+  solver_->restore(x, q, v, L, bs, broken, list, F, T);
   solver_->set_clock(f.attribute_double("time"), f.attribute_long("steps"));
   probe_displacement_ = f.attribute_double("probe_displacement");
   probed_ = f.attribute_long("probed") != 0;

@@ -14,7 +14,7 @@ namespace tessera {
 namespace {
 
 constexpr int kStateWidth = 14;     // x, q, v, w, the element's clock
-constexpr int kSyncWidth = 16;      // x, q, v, w, L
+constexpr int kSyncWidth = 22;      // x, q, v, w, L, F, T
 constexpr int kBondWidth = 10;      // 3 x (slip xi, slip eta, u_max), broken
 
 }  // namespace
@@ -108,7 +108,7 @@ double FractureSolver::stable_dt() const {
   return settings_.stability_factor * t;
 }
 
-void FractureSolver::setup() {
+void FractureSolver::setup(bool fresh) {
   const std::size_t n = block_.size();
   dt_ = settings_.time_step ? *settings_.time_step : stable_dt();
   if (settings_.stepping == Stepping::stability) {
@@ -132,6 +132,7 @@ void FractureSolver::setup() {
     w_[e] = q_[e].rotate({Lb.x / I.x, Lb.y / I.y, Lb.z / I.z});
   }
   exchange();
+  if (!fresh) return;  // a restart keeps the forces of the checkpoint (restore)
   compute_forces(time_);
   share_broken();
 }
@@ -250,13 +251,15 @@ void FractureSolver::sync_state() {
         const std::size_t i = static_cast<std::size_t>(e);
         const Quaternion& q = q_[i];
         const double s[kSyncWidth] = {x_[i].x, x_[i].y, x_[i].z, q.w,     q.x,     q.y,     q.z,     v_[i].x,
-                                      v_[i].y, v_[i].z, w_[i].x, w_[i].y, w_[i].z, L_[i].x, L_[i].y, L_[i].z};
+                                      v_[i].y, v_[i].z, w_[i].x, w_[i].y, w_[i].z, L_[i].x, L_[i].y, L_[i].z,
+                                      F_[i].x, F_[i].y, F_[i].z, T_[i].x, T_[i].y, T_[i].z};
         std::copy(s, s + kSyncWidth, o);
       },
       [&](int e, const double* s) {
         const std::size_t i = static_cast<std::size_t>(e);
         x_[i] = {s[0], s[1], s[2]}, q_[i] = {s[3], s[4], s[5], s[6]};
         v_[i] = {s[7], s[8], s[9]}, w_[i] = {s[10], s[11], s[12]}, L_[i] = {s[13], s[14], s[15]};
+        F_[i] = {s[16], s[17], s[18]}, T_[i] = {s[19], s[20], s[21]};
       });
   // Bonds: the master's owner holds the current state.
   std::vector<std::vector<int>> bonds_by_rank(static_cast<std::size_t>(decomp_.size()));
@@ -278,13 +281,26 @@ void FractureSolver::sync_state() {
 
 void FractureSolver::restore(const std::vector<Vec3>& x, const std::vector<Quaternion>& q, const std::vector<Vec3>& v,
                              const std::vector<Vec3>& L, const std::vector<std::array<BondVertex, 3>>& bonds,
-                             const std::vector<char>& broken) {
-  x_ = x, q_ = q, v_ = v, L_ = L, bond_state_ = bonds;
+                             const std::vector<char>& broken, const ContactListState& list,
+                             const std::vector<Vec3>& F, const std::vector<Vec3>& T) {
+  bond_state_ = bonds;
+  F_ = F, T_ = T;
   spheres_.clear(), pairs_.clear();
   add_surface_spheres();
   broken_.assign(block_.bonds.size(), 0);
   for (std::size_t b = 0; b < broken.size(); ++b)
     if (broken[b]) broken_[b] = 1, add_spheres(static_cast<int>(b));
+  // The contact list as the interrupted run had it: built from the poses of its last build (the
+  // per-element levels depend on which pairs are listed, not only on which touch).
+  if (!list.stale && list.x.size() == block_.size()) {
+    x_ = list.x, q_ = list.q;
+    build_list();
+  }
+  x_ = x, q_ = q, v_ = v, L_ = L;
+}
+
+ContactListState FractureSolver::contact_list_state() const {
+  return {build_x_, build_q_, spheres_added_ || build_x_.empty()};
 }
 
 void FractureSolver::compute_forces(double time) {
@@ -428,6 +444,7 @@ void FractureSolver::build_list() {
   ++list_builds_;
   spheres_added_ = false;
   pairs_.clear();
+  build_x_ = x_, build_q_ = q_;
   const std::size_t n = spheres_.size();
   sphere_at_build_.resize(n);
   for (std::size_t s = 0; s < n; ++s) {

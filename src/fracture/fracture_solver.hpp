@@ -68,6 +68,14 @@ struct PairForce {
   bool failed = false;  // bonds: a vertex reached u_f
 };
 
+// What rebuilds the contact list after a restart exactly as it was: the element poses at its last
+// build, or stale = true (rebuild at the next step).
+struct ContactListState {
+  std::vector<Vec3> x;
+  std::vector<Quaternion> q;
+  bool stale = true;
+};
+
 struct FractureEnergies {
   double kinetic = 0, bond_elastic = 0, contact_elastic = 0;
 };
@@ -77,8 +85,9 @@ class FractureSolver {
   FractureSolver(const Decomposition& decomp, BondedBlock block, FractureSettings settings,
                  std::optional<Borehole> hole);
 
-  // Forces of the initial state; call once before stepping (or after a restart set the state).
-  void setup();
+  // Call once before stepping. fresh: the forces of the initial state; false (after restore): the
+  // checkpoint's forces, so that a restart repeats the interrupted run bit for bit.
+  void setup(bool fresh = true);
   void step();
 
   double time() const { return time_; }
@@ -115,7 +124,10 @@ class FractureSolver {
   // Collective. Restart: the full state (every rank passes the same arrays).
   void restore(const std::vector<Vec3>& x, const std::vector<Quaternion>& q, const std::vector<Vec3>& v,
                const std::vector<Vec3>& L, const std::vector<std::array<BondVertex, 3>>& bonds,
-               const std::vector<char>& broken);
+               const std::vector<char>& broken, const ContactListState& list, const std::vector<Vec3>& F,
+               const std::vector<Vec3>& T);
+  const std::vector<Vec3>& torque() const { return T_; }
+  ContactListState contact_list_state() const;
   const std::vector<Vec3>& angular_momentum() const { return L_; }
 
   FractureEnergies energies() const;  // collective; bond energy of the elastic law (B2)
@@ -125,7 +137,7 @@ class FractureSolver {
   long list_builds() const { return list_builds_; }
   std::size_t sphere_count() const { return spheres_.size(); }
   std::size_t pair_count() const { return pairs_.size(); }
-  // The pressure force on the hole faces at the last evaluation, summed over the block.
+  // Each element's force at the last evaluation (uniform stepping; current on its owner).
   const std::vector<Vec3>& force() const { return F_; }
 
  private:
@@ -182,7 +194,8 @@ class FractureSolver {
   std::vector<int> newly_broken_;  // this step, bonds whose master this rank owns
   std::vector<Sphere> spheres_;
   std::vector<std::pair<int, int>> pairs_;
-  std::vector<Vec3> sphere_at_build_;
+  std::vector<Vec3> sphere_at_build_, build_x_;
+  std::vector<Quaternion> build_q_;
   double max_radius_ = 0, skin_ = 0;
   bool spheres_added_ = false;
   double dt_ = 0, time_ = 0, min_dt_ = 1e300, min_dt_time_ = 0;
