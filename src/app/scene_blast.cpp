@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: MIT
-// The blast scene (issue 17; docs/theory.md B1-B9): a block meshed into tetrahedra (Gmsh), bonded
+// The blast scene (issue 17; docs/theory.md B1-B10): a block meshed into tetrahedra (Gmsh), bonded
 // on every shared face, fractured by the gas pressure in a borehole. Case keys: section `blast`
 // (mesh, density, bond, contact, borehole, stepping, time_step, stability_factor, travel_limit,
-// max_level, damping, probe_time, process_grid), `run`, `output`. Output: DIR/elements_NNNNNN.h5 + DIR/elements.xmf (each element's
-// tetrahedron at its pose, with displacement, velocity, damage, broken faces and time-step level
-// per cell), checkpoints, summary.json.
+// max_level, damping, probe_time, process_grid), `run`, `output`. Output:
+// DIR/elements_NNNNNN.h5 + DIR/elements.xmf (each element's tetrahedron at its pose, with
+// displacement, velocity, damage, broken faces and time-step level per cell), DIR/cracks.xmf (the
+// released faces), checkpoints, summary.json.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -177,6 +178,7 @@ class BlastScene final : public SteppedScene {
   struct Snapshot {
     double time;
     std::string file;
+    long cracks = 0;  // released faces
   };
   std::vector<Snapshot> snapshots_;
 };
@@ -204,6 +206,7 @@ void BlastScene::write_snapshot() {
   const bool root = decomp_->rank() == 0;
   const BondedBlock& b = solver_->block();
   const std::size_t n = root ? b.size() : 0;
+  long cracks = 0;
   char name[64];
   std::snprintf(name, sizeof name, "elements_%06zu.h5", snapshots_.size());
   if (root) fs::create_directories(out_dir_);
@@ -234,9 +237,25 @@ void BlastScene::write_snapshot() {
     f.write_rows("damage", damage.data(), n, 1);
     f.write_rows("broken_faces", broken_faces.data(), n, 1);
     f.write_rows("dt_level", level.data(), n, 1);
+    // The released faces, as the master element holds them now: ParaView's crack surfaces.
+    std::vector<double> crack_nodes;
+    std::vector<std::int64_t> crack_tris;
+    for (std::size_t k = 0; root && k < b.bonds.size(); ++k) {
+      if (!solver_->broken()[k]) continue;
+      const BondGeometry& g = b.bonds[k];
+      const std::size_t m = static_cast<std::size_t>(g.master);
+      for (int j = 0; j < 3; ++j) {
+        const Vec3 p = solver_->x()[m] + solver_->q()[m].rotate(g.at_master[j]);
+        crack_tris.push_back(static_cast<std::int64_t>(crack_nodes.size() / 3));
+        crack_nodes.insert(crack_nodes.end(), {p.x, p.y, p.z});
+      }
+    }
+    cracks = static_cast<long>(crack_tris.size() / 3);
+    f.write_rows("crack_nodes", crack_nodes.data(), crack_nodes.size() / 3, 3);
+    f.write_rows("crack_triangles", crack_tris.data(), crack_tris.size() / 3, 3);
     f.set_attribute("time", time());
   }
-  snapshots_.push_back({time(), name});
+  snapshots_.push_back({time(), name, cracks});
   if (!root) return;
   const long N = static_cast<long>(b.size());
   std::ostringstream grids;
@@ -260,6 +279,29 @@ void BlastScene::write_snapshot() {
             << item(v, "Float", 1, N) << "</Attribute>\n";
     grids << "   </Grid>\n";
   }
+  std::ostringstream crack_grids;
+  crack_grids << std::setprecision(17);
+  for (const Snapshot& s : snapshots_) {
+    // ParaView's reader wants a grid at every time: an empty one is a single degenerate triangle.
+    crack_grids << "   <Grid Name=\"cracks\" GridType=\"Uniform\">\n    <Time Value=\"" << s.time << "\"/>\n";
+    if (s.cracks > 0) {
+      crack_grids << "    <Topology TopologyType=\"Triangle\" NumberOfElements=\"" << s.cracks << "\"><DataItem Format=\"HDF\" "
+                  << "NumberType=\"Int\" Precision=\"8\" Dimensions=\"" << s.cracks << " 3\">" << s.file
+                  << ":/crack_triangles</DataItem></Topology>\n    <Geometry GeometryType=\"XYZ\"><DataItem Format=\"HDF\" "
+                  << "NumberType=\"Float\" Precision=\"8\" Dimensions=\"" << 3 * s.cracks << " 3\">" << s.file
+                  << ":/crack_nodes</DataItem></Geometry>\n";
+    } else {
+      crack_grids << "    <Topology TopologyType=\"Triangle\" NumberOfElements=\"1\"><DataItem Format=\"XML\" "
+                  << "NumberType=\"Int\" Dimensions=\"1 3\">0 0 0</DataItem></Topology>\n    <Geometry "
+                  << "GeometryType=\"XYZ\"><DataItem Format=\"XML\" NumberType=\"Float\" Dimensions=\"1 3\">0 0 0"
+                  << "</DataItem></Geometry>\n";
+    }
+    crack_grids << "   </Grid>\n";
+  }
+  write_file_atomically(out_dir_ + "/cracks.xmf",
+                        "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n  <Grid Name=\"cracks\" "
+                        "GridType=\"Collection\" CollectionType=\"Temporal\">\n" +
+                            crack_grids.str() + "  </Grid>\n </Domain>\n</Xdmf>\n");
   write_file_atomically(out_dir_ + "/elements.xmf",
                         "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n  <Grid Name=\"blast\" "
                         "GridType=\"Collection\" CollectionType=\"Temporal\">\n" +
@@ -397,7 +439,8 @@ void BlastScene::summarise(nlohmann::json& s) {
   s["contact_spheres"] = solver_->sphere_count();
   s["contact_list_builds"] = solver_->list_builds();
   s["contact_seconds_per_rank"] = contact_time;
-  s["output"] = {{"checkpoint", "checkpoint.h5"}, {"snapshots", snapshots_.empty() ? "" : "elements.xmf"}};
+  s["output"] = {{"checkpoint", "checkpoint.h5"},
+                 {"snapshots", snapshots_.empty() ? "" : "elements.xmf, cracks.xmf"}};
 }
 
 }  // namespace
