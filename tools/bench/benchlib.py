@@ -9,7 +9,7 @@ import sys
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SHARED = os.environ.get("TESSERA_SHARED", os.path.join(os.path.dirname(ROOT), "shared"))
 PEERS = os.path.join(SHARED, "bench", "peers")
-TESSERA = os.path.join(ROOT, "build", "bin", "tessera")
+TESSERA = os.environ.get("TESSERA_BIN", os.path.join(ROOT, "build", "bin", "tessera"))
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
            OMPI_MCA_rmaps_base_oversubscribe="1", OMP_NUM_THREADS="1")
 ENV.pop("CI", None)
