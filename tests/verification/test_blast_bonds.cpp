@@ -8,7 +8,7 @@
 //     perfectly plastic (the slip takes the rest);
 //   - two mirror-image tetrahedra pulled apart through their bond without dashpots: the kinetic
 //     energy lost when the face breaks is G_f A (the trajectory's time error, O(dt^2) per unit of
-//     work, bounded at 0.5 %), momentum conserved to round-off;
+//     work, bounded at 0.1 %; measured -0.001 %), momentum conserved to round-off;
 //   - an intact bar's first longitudinal mode has the wave speed sqrt(E / rho) of the same mesh's
 //     static modulus E (a separate linear solve of the springs), within 0.5 %;
 //   - an intact bar without dashpots keeps its energy (velocity Verlet: bounded, O(dt^2) error;
@@ -148,7 +148,9 @@ TEST(BondedPair, BreakingTheFaceCostsGfTimesItsArea) {
   ASSERT_EQ(f.broken_count(), 1);
   f.step();  // the bond is gone: only kinetic energy is left
   const FractureEnergies en = f.energies();
-  EXPECT_NEAR(e0 - en.kinetic, s.bond.fracture_energy * area, 5e-3 * s.bond.fracture_energy * area);
+  std::printf("pair: dissipated %.6g J, G_f A %.6g J (%+.3f %%)\n", e0 - en.kinetic, s.bond.fracture_energy * area,
+              100 * ((e0 - en.kinetic) / (s.bond.fracture_energy * area) - 1));
+  EXPECT_NEAR(e0 - en.kinetic, s.bond.fracture_energy * area, 1e-3 * s.bond.fracture_energy * area);
   const Vec3 p = f.v()[0] * f.block().mass[0] + f.v()[1] * f.block().mass[1];
   EXPECT_LT(norm(p), 1e-14 * m * v0);
   EXPECT_LT(norm(f.w()[0]) + norm(f.w()[1]), 1e-9 * v0 / a);  // no rotation from a centred pull
@@ -315,7 +317,7 @@ TEST(BondedBar, WaveSpeedMatchesTheStaticStiffness) {
   // (nu pi r_g / L)^2 / 2 < 3e-4) put the two within 0.1 %; tolerance 0.5 %.
   int rank = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  if (rank != 0) GTEST_SKIP() << "one rank's work (serial)";
+  if (rank != 0) return;  // serial work: rank 0 alone
   const int nx = 30;
   const double h = 0.02, L = nx * h, area = 4 * h * h;
   FractureSettings s;
