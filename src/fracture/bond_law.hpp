@@ -65,7 +65,7 @@ inline double bond_normal_stress(const BondLaw& law, BondVertex& s, double un) {
 // sigma (tension > 0); moves the slip when the Coulomb limit is exceeded.
 inline void bond_shear_stress(const BondLaw& law, BondVertex& s, const double ut[2], double sigma, double tau[2]) {
   double d0 = ut[0] - s.slip[0], d1 = ut[1] - s.slip[1];
-  const double dn = std::hypot(d0, d1);
+  const double dn = std::sqrt(d0 * d0 + d1 * d1);
   const double limit = std::max(0.0, law.cohesion - sigma * law.friction);
   if (law.ks * dn > limit) {
     const double ua = dn - limit / law.ks, f = ua / dn;

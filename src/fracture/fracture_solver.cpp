@@ -49,7 +49,10 @@ FractureSolver::FractureSolver(const Decomposition& decomp, BondedBlock block, F
   v_.assign(n, {}), w_.assign(n, {}), L_.assign(n, {}), F_.assign(n, {}), T_.assign(n, {});
   bond_state_.assign(block_.bonds.size(), {});
   broken_.assign(block_.bonds.size(), 0);
-  skin_ = 0.1 * block_.min_edge;
+  skin_ = 0.25 * block_.min_edge;
+  reach_.assign(n, 0.0);
+  for (std::size_t e = 0; e < n; ++e)
+    for (const Vec3& p : block_.vertices[e]) reach_[e] = std::max(reach_[e], norm(p));
   element_bonds_.assign(n, {});
   for (std::size_t b = 0; b < block_.bonds.size(); ++b)
     for (int e : {block_.bonds[b].master, block_.bonds[b].slave})
@@ -433,9 +436,13 @@ bool FractureSolver::list_stale(double ahead) const {
   if (spheres_added_) return true;
   const double limit = 0.5 * skin_ - ahead;
   if (limit <= 0) return true;
-  for (std::size_t s = 0; s < spheres_.size(); ++s) {
-    const std::size_t e = static_cast<std::size_t>(spheres_[s].element);
-    if (norm2(x_[e] + q_[e].rotate(spheres_[s].centre) - sphere_at_build_[s]) > limit * limit) return true;
+  // Per element: a point at distance r from its centroid moved at most |dx| + theta r since the
+  // build, theta the rotation angle between the two orientations.
+  for (std::size_t e = 0; e < block_.size(); ++e) {
+    const Quaternion& a = q_[e];
+    const Quaternion& b = build_q_[e];
+    const double c = std::min(1.0, std::fabs(a.w * b.w + a.x * b.x + a.y * b.y + a.z * b.z));
+    if (norm(x_[e] - build_x_[e]) + 2 * std::acos(c) * reach_[e] > limit) return true;
   }
   return false;
 }

@@ -197,6 +197,7 @@ class FractureSolver {
   std::vector<Vec3> sphere_at_build_, build_x_;
   std::vector<Quaternion> build_q_;
   double max_radius_ = 0, skin_ = 0;
+  std::vector<double> reach_;  // each element's farthest vertex from its centroid
   bool spheres_added_ = false;
   double dt_ = 0, time_ = 0, min_dt_ = 1e300, min_dt_time_ = 0;
   std::vector<int> level_, stable_level_;
