@@ -338,6 +338,12 @@ void BlastScene::write_checkpoint(const std::string& path) {
     H5File f = H5File::create(tmp, comm);
     f.write_rows("elements", state.data(), n, 19);
     f.write_rows("contact_list_poses", list_poses.data(), list_poses.size() / 7, 7);
+    std::vector<std::int64_t> pairs, unlisted;
+    for (const auto& [a, b] : list.pairs) pairs.insert(pairs.end(), {a, b});
+    for (int u : list.unlisted) unlisted.push_back(u);
+    f.write_rows("contact_list_pairs", pairs.data(), root ? pairs.size() / 2 : 0, 2);
+    f.write_rows("contact_list_unlisted", unlisted.data(), root ? unlisted.size() : 0, 1);
+    f.set_attribute("contact_list_cell_radius", list.cell_radius);
     f.write_rows("bonds", bonds.data(), nb, 10);
     f.set_attribute("time", time());
     f.set_attribute("steps", steps());
@@ -384,6 +390,10 @@ void BlastScene::read_checkpoint(const std::string& path) {
         list.x.push_back({s[0], s[1], s[2]});
         list.q.push_back({s[3], s[4], s[5], s[6]});
       }
+      const std::vector<std::int64_t> pairs = f.read_all<std::int64_t>("contact_list_pairs", cols);
+      for (std::size_t k = 0; k + 1 < pairs.size(); k += 2) list.pairs.push_back({pairs[k], pairs[k + 1]});
+      for (const std::int64_t u : f.read_all<std::int64_t>("contact_list_unlisted", cols)) list.unlisted.push_back(static_cast<int>(u));
+      list.cell_radius = f.attribute_double("contact_list_cell_radius");
     }
   }
   solver_->restore(x, q, v, L, bs, broken, list, F, T);

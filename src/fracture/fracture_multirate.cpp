@@ -30,19 +30,20 @@
 
 namespace tessera {
 
-FractureSolver::Pose FractureSolver::pose_at(std::size_t e, double t) const {
+const FractureSolver::Pose& FractureSolver::pose_at(std::size_t e, double t) {
   if (t == t_el_[e]) return pose(e);
+  if (pose_epoch_[e] == epoch_) return pose_cache_[e];
   const double h = t - t_el_[e];
-  Pose p = pose(e);
-  p.x = x_[e] + v_[e] * h;
+  Quaternion q = q_[e];
   const double wn = norm(w_[e]);
   if (wn > 0) {
     double s, c;
     small_angle_sincos(0.5 * wn * h, s, c);
     const Vec3 a = w_[e] * (s / wn);
-    p.q = Quaternion{c, a.x, a.y, a.z} * q_[e];
+    q = Quaternion{c, a.x, a.y, a.z} * q_[e];
   }
-  return p;
+  pose_epoch_[e] = epoch_;
+  return pose_cache_[e] = make_pose(x_[e] + v_[e] * h, v_[e], w_[e], q);
 }
 
 void FractureSolver::advance_to(std::size_t i, double t) {
@@ -97,7 +98,7 @@ void FractureSolver::multirate_step() {
       double vmax = 0;
       for (std::size_t e = 0; e < block_.size(); ++e)
         vmax = std::max(vmax, norm(v_[e]) + norm(w_[e]) * block_.max_edge);
-      if (list_stale(2 * vmax * dt_)) build_list();
+      update_list(2 * vmax * dt_);
     }
     for (std::size_t b = 0; b < block_.bonds.size(); ++b) {
       const std::size_t i = static_cast<std::size_t>(block_.bonds[b].master), j = static_cast<std::size_t>(block_.bonds[b].slave);
@@ -145,6 +146,7 @@ void FractureSolver::multirate_step() {
   for (long s = 0; s < substeps; ++s) {
     const double t = time_ + static_cast<double>(s) * h_min;
     const int first = s == 0 ? 0 : K - std::countr_zero(static_cast<unsigned long>(s));
+    new_epoch();
     {
       auto timer = timers_.scope("bond_forces");
       for (int k = first; k <= K; ++k) {

@@ -49,6 +49,8 @@ FractureSolver::FractureSolver(const Decomposition& decomp, BondedBlock block, F
   v_.assign(n, {}), w_.assign(n, {}), L_.assign(n, {}), F_.assign(n, {}), T_.assign(n, {});
   bond_state_.assign(block_.bonds.size(), {});
   broken_.assign(block_.bonds.size(), 0);
+  pose_cache_.resize(n), pose_epoch_.assign(n, -1);
+  element_spheres_.assign(n, {});
   skin_ = 0.25 * block_.min_edge;
   reach_.assign(n, 0.0);
   for (std::size_t e = 0; e < n; ++e)
@@ -288,25 +290,86 @@ void FractureSolver::restore(const std::vector<Vec3>& x, const std::vector<Quate
                              const std::vector<Vec3>& F, const std::vector<Vec3>& T) {
   bond_state_ = bonds;
   F_ = F, T_ = T;
-  spheres_.clear(), pairs_.clear();
+  spheres_.clear(), pairs_.clear(), cells_.clear(), unlisted_bonds_.clear();
+  element_spheres_.assign(block_.size(), {});
+  max_radius_ = 0;
   add_surface_spheres();
   broken_.assign(block_.bonds.size(), 0);
+  // The spheres of faces the list already held, then those of faces released after it was last
+  // made, in the order they broke (they join the list at the next step, as they would have).
+  std::vector<char> unlisted(block_.bonds.size(), 0);
+  for (int b : list.unlisted) unlisted[static_cast<std::size_t>(b)] = 1;
   for (std::size_t b = 0; b < broken.size(); ++b)
-    if (broken[b]) broken_[b] = 1, add_spheres(static_cast<int>(b));
-  // The contact list as the interrupted run had it: built from the poses of its last build (the
-  // per-element levels depend on which pairs are listed, not only on which touch).
+    if (broken[b] && !unlisted[b]) broken_[b] = 1, add_spheres(static_cast<int>(b));
+  unlisted_bonds_.clear();
+  listed_spheres_ = spheres_.size();
+  for (int b : list.unlisted) broken_[static_cast<std::size_t>(b)] = 1, add_spheres(b);
+  build_x_.clear(), build_q_.clear();
   if (!list.stale && list.x.size() == block_.size()) {
+    // The list as the interrupted run had it (the per-element levels depend on which pairs are
+    // listed, not only on which touch): its pairs by sphere key, the cells and the poses of its
+    // last build.
+    build_x_ = list.x, build_q_ = list.q;
     x_ = list.x, q_ = list.q;
-    build_list();
+    cell_radius_ = list.cell_radius;
+    cell_size_ = 2 * cell_radius_ + skin_;
+    std::unordered_map<long, int> by_key;
+    for (std::size_t k = 0; k < spheres_.size(); ++k) {
+      by_key[spheres_[k].key] = static_cast<int>(k);
+      if (k < listed_spheres_) cells_[cell_key(sphere_position(k))].push_back(static_cast<int>(k));
+    }
+    const int rank = decomp_.rank();
+    for (const auto& [ka, kb] : list.pairs) {
+      const int a = by_key.at(ka), b = by_key.at(kb);
+      if (owner_[static_cast<std::size_t>(spheres_[static_cast<std::size_t>(a)].element)] == rank ||
+          owner_[static_cast<std::size_t>(spheres_[static_cast<std::size_t>(b)].element)] == rank)
+        pairs_.push_back({a, b});
+    }
+    sort_pairs();
   }
   x_ = x, q_ = q, v_ = v, L_ = L;
 }
 
 ContactListState FractureSolver::contact_list_state() const {
-  return {build_x_, build_q_, spheres_added_ || build_x_.empty()};
+  ContactListState s{build_x_, build_q_, build_x_.empty(), {}, unlisted_bonds_, cell_radius_};
+  // Every rank's pairs, each once (a pair across ranks is on both), by key.
+  std::vector<long> mine;
+  for (const auto& [a, b] : pairs_)
+    mine.insert(mine.end(), {spheres_[static_cast<std::size_t>(a)].key, spheres_[static_cast<std::size_t>(b)].key});
+  std::vector<long> all = mine;
+  if (decomp_.size() > 1) {
+    int n = static_cast<int>(mine.size());
+    std::vector<int> counts(static_cast<std::size_t>(decomp_.size())), displs(counts.size());
+    MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, decomp_.comm());
+    int total = 0;
+    for (std::size_t r = 0; r < counts.size(); ++r) displs[r] = total, total += counts[r];
+    all.resize(static_cast<std::size_t>(total));
+    MPI_Allgatherv(mine.data(), n, MPI_LONG, all.data(), counts.data(), displs.data(), MPI_LONG, decomp_.comm());
+  }
+  for (std::size_t k = 0; k + 1 < all.size(); k += 2) s.pairs.push_back({all[k], all[k + 1]});
+  std::sort(s.pairs.begin(), s.pairs.end());
+  s.pairs.erase(std::unique(s.pairs.begin(), s.pairs.end()), s.pairs.end());
+  return s;
+}
+
+FractureSolver::Pose FractureSolver::make_pose(const Vec3& x, const Vec3& v, const Vec3& w, const Quaternion& q) {
+  const double xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z, xy = q.x * q.y, xz = q.x * q.z, yz = q.y * q.z,
+               wx = q.w * q.x, wy = q.w * q.y, wz = q.w * q.z;
+  return {x, v, w, q,
+          {Vec3{1 - 2 * (yy + zz), 2 * (xy - wz), 2 * (xz + wy)}, Vec3{2 * (xy + wz), 1 - 2 * (xx + zz), 2 * (yz - wx)},
+           Vec3{2 * (xz - wy), 2 * (yz + wx), 1 - 2 * (xx + yy)}}};
+}
+
+const FractureSolver::Pose& FractureSolver::pose(std::size_t e) {
+  if (pose_epoch_[e] != epoch_) {
+    pose_cache_[e] = make_pose(x_[e], v_[e], w_[e], q_[e]);
+    pose_epoch_[e] = epoch_;
+  }
+  return pose_cache_[e];
 }
 
 void FractureSolver::compute_forces(double time) {
+  new_epoch();
   for (int e : owned_by_rank_[static_cast<std::size_t>(decomp_.rank())])
     F_[static_cast<std::size_t>(e)] = {}, T_[static_cast<std::size_t>(e)] = {};
   {
@@ -327,12 +390,12 @@ PairForce FractureSolver::bond_force(std::size_t b, const Pose& pi, const Pose& 
   const BondLaw& law = settings_.bond;
   const double cn = settings_.damping ? law.cn : 0, cs = settings_.damping ? law.cs : 0;
   const BondGeometry& g = block_.bonds[b];
-  const Vec3 n = pi.q.rotate(g.normal), xi = pi.q.rotate(g.xi), eta = pi.q.rotate(g.eta);
+  const Vec3 n = pi.rot(g.normal), xi = pi.rot(g.xi), eta = pi.rot(g.eta);
   const double share = g.area / 3;
   PairForce out;
   (void)h;
   for (int k = 0; k < 3; ++k) {
-    const Vec3 ri = pi.q.rotate(g.at_master[k]), rj = pj.q.rotate(g.at_slave[k]);
+    const Vec3 ri = pi.rot(g.at_master[k]), rj = pj.rot(g.at_slave[k]);
     const Vec3 u = (pj.x + rj) - (pi.x + ri);
     const Vec3 du = (pj.v + cross(pj.w, rj)) - (pi.v + cross(pi.w, ri));
     const double un = dot(u, n);
@@ -394,153 +457,6 @@ long FractureSolver::broken_count() const {
   long n = 0;
   for (char c : broken_) n += c;
   return n;
-}
-
-void FractureSolver::add_spheres(int bond) {
-  const BondGeometry& g = block_.bonds[static_cast<std::size_t>(bond)];
-  const int d = settings_.sphere_divisions;
-  long key = static_cast<long>(bond) * (d - 1) * (d - 2);  // (bond, side, k): the canonical order
-  for (const auto& [e, f] : {std::pair{g.master, g.master_face}, std::pair{g.slave, g.slave_face}})
-    for (const FaceSphere& s : face_spheres(block_.vertices[static_cast<std::size_t>(e)], f, settings_.sphere_divisions)) {
-      spheres_.push_back({e, s.centre, s.radius, key++});
-      max_radius_ = std::max(max_radius_, s.radius);
-    }
-  spheres_added_ = true;
-}
-
-void FractureSolver::add_surface_spheres() {
-  // B6: the block's own surface (the hole's wall included) carries spheres from the start, so that
-  // fragments meet it; their keys follow every bond's.
-  const int d = settings_.sphere_divisions;
-  const long ns = (d - 1) * (d - 2) / 2;
-  for (std::size_t f = 0; f < block_.surface.size(); ++f) {
-    const SurfaceFace& sf = block_.surface[f];
-    long key = (2 * static_cast<long>(block_.bonds.size()) + static_cast<long>(f)) * ns;
-    for (const FaceSphere& s : face_spheres(block_.vertices[static_cast<std::size_t>(sf.element)], sf.face, d)) {
-      spheres_.push_back({sf.element, s.centre, s.radius, key++});
-      max_radius_ = std::max(max_radius_, s.radius);
-    }
-  }
-  spheres_added_ = true;
-}
-
-bool FractureSolver::bonded(int a, int b) const {
-  for (int k : element_bonds_[static_cast<std::size_t>(a)]) {
-    const BondGeometry& g = block_.bonds[static_cast<std::size_t>(k)];
-    if ((g.master == b || g.slave == b) && !broken_[static_cast<std::size_t>(k)]) return true;
-  }
-  return false;
-}
-
-bool FractureSolver::list_stale(double ahead) const {
-  if (spheres_added_) return true;
-  const double limit = 0.5 * skin_ - ahead;
-  if (limit <= 0) return true;
-  // Per element: a point at distance r from its centroid moved at most |dx| + theta r since the
-  // build, theta the rotation angle between the two orientations.
-  for (std::size_t e = 0; e < block_.size(); ++e) {
-    const Quaternion& a = q_[e];
-    const Quaternion& b = build_q_[e];
-    const double c = std::min(1.0, std::fabs(a.w * b.w + a.x * b.x + a.y * b.y + a.z * b.z));
-    if (norm(x_[e] - build_x_[e]) + 2 * std::acos(c) * reach_[e] > limit) return true;
-  }
-  return false;
-}
-
-void FractureSolver::build_list() {
-  ++list_builds_;
-  spheres_added_ = false;
-  pairs_.clear();
-  build_x_ = x_, build_q_ = q_;
-  const std::size_t n = spheres_.size();
-  sphere_at_build_.resize(n);
-  for (std::size_t s = 0; s < n; ++s) {
-    const std::size_t e = static_cast<std::size_t>(spheres_[s].element);
-    sphere_at_build_[s] = x_[e] + q_[e].rotate(spheres_[s].centre);
-  }
-  const double cell = 2 * max_radius_ + skin_;
-  auto key = [&](long a, long b, long c) { return (a & 0x1FFFFF) | ((b & 0x1FFFFF) << 21) | ((c & 0x1FFFFF) << 42); };
-  auto coord = [&](double v) { return static_cast<long>(std::floor(v / cell)) + (1L << 20); };
-  std::unordered_map<long, std::vector<int>> cells;
-  for (std::size_t s = 0; s < n; ++s) {
-    const Vec3& p = sphere_at_build_[s];
-    cells[key(coord(p.x), coord(p.y), coord(p.z))].push_back(static_cast<int>(s));
-  }
-  const int rank = decomp_.rank();
-  for (std::size_t a = 0; a < n; ++a) {
-    const Vec3& p = sphere_at_build_[a];
-    const int ea = spheres_[a].element;
-    const long cx = coord(p.x), cy = coord(p.y), cz = coord(p.z);
-    for (long dx = -1; dx <= 1; ++dx)
-      for (long dy = -1; dy <= 1; ++dy)
-        for (long dz = -1; dz <= 1; ++dz) {
-          const auto it = cells.find(key(cx + dx, cy + dy, cz + dz));
-          if (it == cells.end()) continue;
-          for (int b : it->second) {
-            if (b <= static_cast<int>(a)) continue;
-            const int eb = spheres_[static_cast<std::size_t>(b)].element;
-            if (eb == ea || bonded(ea, eb)) continue;
-            if (owner_[static_cast<std::size_t>(ea)] != rank && owner_[static_cast<std::size_t>(eb)] != rank) continue;
-            const double reach = spheres_[a].radius + spheres_[static_cast<std::size_t>(b)].radius + skin_;
-            if (norm2(p - sphere_at_build_[static_cast<std::size_t>(b)]) < reach * reach) {
-              const bool first = spheres_[a].key < spheres_[static_cast<std::size_t>(b)].key;
-              pairs_.push_back(first ? std::pair{static_cast<int>(a), b} : std::pair{b, static_cast<int>(a)});
-            }
-          }
-        }
-  }
-  // Canonical order (sphere keys), whatever order the faces broke in or a restart re-created them.
-  std::sort(pairs_.begin(), pairs_.end(), [&](const auto& p, const auto& r) {
-    const auto& S = spheres_;
-    return std::pair{S[static_cast<std::size_t>(p.first)].key, S[static_cast<std::size_t>(p.second)].key} <
-           std::pair{S[static_cast<std::size_t>(r.first)].key, S[static_cast<std::size_t>(r.second)].key};
-  });
-}
-
-PairForce FractureSolver::contact_force(std::size_t pair, const Pose& pa, const Pose& pb, double h) {
-  const auto [a, b] = pairs_[pair];
-  const Sphere &sa = spheres_[static_cast<std::size_t>(a)], &sb = spheres_[static_cast<std::size_t>(b)];
-  const std::size_t ea = static_cast<std::size_t>(sa.element), eb = static_cast<std::size_t>(sb.element);
-  PairForce out;
-  const Vec3 ca = pa.x + pa.q.rotate(sa.centre), cb = pb.x + pb.q.rotate(sb.centre);
-  const Vec3 d = ca - cb;
-  const double dist = norm(d), overlap = sa.radius + sb.radius - dist;
-  if (overlap <= 0 || dist == 0) return out;
-  const double k = settings_.contact_stiffness, c = settings_.damping ? settings_.contact_damping : 0;
-  const Vec3 n = d / dist;
-  const Vec3 cp = cb + n * (sb.radius - 0.5 * overlap);
-  const Vec3 arm_a = cp - pa.x, arm_b = cp - pb.x;
-  const Vec3 vrel = (pa.v + cross(pa.w, arm_a)) - (pb.v + cross(pb.w, arm_b));
-  const double vn = dot(vrel, n);
-  // B7: the dashpot and the friction, each as backward Euler on the isolated pair (reduced mass
-  // m*, over the pair's step h): c / (1 + c h / m*) tends to c as h -> 0, and neither can reverse
-  // the pair's relative velocity within a step (Table 1's dashpot is ~200 times critical:
-  // explicit, it needs h < 2 m / c, 1e-8 s for a 5 cm element).
-  const double m_pair = block_.mass[ea] * block_.mass[eb] / (block_.mass[ea] + block_.mass[eb]);
-  const double c_eff = c / (1 + c * h / m_pair);
-  const double fn = std::max(0.0, k * overlap - c_eff * vn);
-  Vec3 F = n * fn;
-  const Vec3 vt = vrel - n * vn;
-  const double st = norm(vt);
-  if (st > 0) F -= vt * (std::min(settings_.contact_friction * fn, m_pair * st / h) / st);
-  out.force = F;  // on a; -F on b
-  out.torque_j = cross(arm_a, F);
-  out.torque_i = -cross(arm_b, F);
-  return out;
-}
-
-void FractureSolver::contact_forces() {
-  if (spheres_.empty()) return;
-  if (list_stale(0)) build_list();
-  const int rank = decomp_.rank();
-  for (std::size_t p = 0; p < pairs_.size(); ++p) {
-    const std::size_t ea = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(pairs_[p].first)].element);
-    const std::size_t eb = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(pairs_[p].second)].element);
-    ++contact_evaluations_;
-    const PairForce f = contact_force(p, pose(ea), pose(eb), dt_);
-    if (owner_[ea] == rank) F_[ea] += f.force, T_[ea] += f.torque_j;
-    if (owner_[eb] == rank) F_[eb] -= f.force, T_[eb] += f.torque_i;
-  }
 }
 
 void FractureSolver::borehole_forces(double t) {

@@ -23,6 +23,7 @@
 #include <mpi.h>
 
 #include <optional>
+#include <unordered_map>
 #include <vector>
 
 #include "core/decomposition.hpp"
@@ -74,6 +75,9 @@ struct ContactListState {
   std::vector<Vec3> x;
   std::vector<Quaternion> q;
   bool stale = true;
+  std::vector<std::pair<long, long>> pairs;  // every listed pair (all ranks), by sphere key
+  std::vector<int> unlisted;                 // faces released since the list was last made, in order
+  double cell_radius = 0;                    // the largest sphere radius at the last build
 };
 
 struct FractureEnergies {
@@ -127,7 +131,7 @@ class FractureSolver {
                const std::vector<char>& broken, const ContactListState& list, const std::vector<Vec3>& F,
                const std::vector<Vec3>& T);
   const std::vector<Vec3>& torque() const { return T_; }
-  ContactListState contact_list_state() const;
+  ContactListState contact_list_state() const;  // collective
   const std::vector<Vec3>& angular_momentum() const { return L_; }
 
   FractureEnergies energies() const;  // collective; bond energy of the elastic law (B2)
@@ -141,10 +145,15 @@ class FractureSolver {
   const std::vector<Vec3>& force() const { return F_; }
 
  private:
+  // An element's state where a pair is evaluated, with its rotation matrix (rows), built once per
+  // element and evaluation moment (a sub-step) however many pairs read it.
   struct Pose {
     Vec3 x, v, w;
     Quaternion q;
+    std::array<Vec3, 3> R;
+    Vec3 rot(const Vec3& a) const { return {dot(R[0], a), dot(R[1], a), dot(R[2], a)}; }
   };
+  static Pose make_pose(const Vec3& x, const Vec3& v, const Vec3& w, const Quaternion& q);
   struct Sphere {
     int element;
     Vec3 centre;  // body frame
@@ -156,13 +165,14 @@ class FractureSolver {
   void exchange();
   void exchange_elements(const std::vector<std::vector<int>>& lists);  // x, q, v, w, clock of each list's rank
   double element_limit(std::size_t e) const;
-  Pose pose_at(std::size_t e, double t) const;  // on its piecewise-linear path (B10)
+  const Pose& pose_at(std::size_t e, double t);  // on its piecewise-linear path (B10), cached likewise
   void assign_levels();
   void advance_to(std::size_t e, double t);  // drift (x, q) from its clock to t
   void kick_impulse(std::size_t e);          // v += S / m, L += A
   void multirate_step();
   void compute_forces(double t);  // t: the time of the state (the hole's pressure)
-  Pose pose(std::size_t e) const { return {x_[e], v_[e], w_[e], q_[e]}; }
+  const Pose& pose(std::size_t e);  // the current state (cached until new_epoch())
+  void new_epoch() { ++epoch_; }
   // B2-B5 on bond b (updates its state) and B7 on contact pair p, over a step h (the dashpots).
   PairForce bond_force(std::size_t b, const Pose& master, const Pose& slave, double h);
   PairForce contact_force(std::size_t p, const Pose& a, const Pose& b, double h);
@@ -177,6 +187,12 @@ class FractureSolver {
   // Two elements still joined by an intact bond: their spheres do not touch (the bond carries it).
   bool bonded(int a, int b) const;
   void build_list();
+  void extend_list();               // the spheres and unbonded pairs of faces released since
+  void update_list(double ahead);  // rebuild when stale (ahead: what the coming step may move), else extend
+  void consider_pair(int a, int b, const Vec3& pa, const Vec3& pb);
+  void sort_pairs();
+  long cell_key(const Vec3& p) const;
+  Vec3 sphere_position(std::size_t s) const;
   double stable_dt() const;
 
   const Decomposition& decomp_;
@@ -194,13 +210,20 @@ class FractureSolver {
   std::vector<int> newly_broken_;  // this step, bonds whose master this rank owns
   std::vector<Sphere> spheres_;
   std::vector<std::pair<int, int>> pairs_;
-  std::vector<Vec3> sphere_at_build_, build_x_;
+  std::vector<Vec3> build_x_;
   std::vector<Quaternion> build_q_;
   double max_radius_ = 0, skin_ = 0;
   std::vector<double> reach_;  // each element's farthest vertex from its centroid
-  bool spheres_added_ = false;
+  std::vector<std::vector<int>> element_spheres_;
+  std::vector<int> unlisted_bonds_;  // released since the list was last made
+  std::size_t listed_spheres_ = 0;
+  std::unordered_map<long, std::vector<int>> cells_;
+  double cell_size_ = 1, cell_radius_ = 0;
   double dt_ = 0, time_ = 0, min_dt_ = 1e300, min_dt_time_ = 0;
   std::vector<int> level_, stable_level_;
+  std::vector<Pose> pose_cache_;
+  std::vector<long> pose_epoch_;
+  long epoch_ = 0;
   std::vector<double> t_el_;      // each element's clock (its x, q are of that time)
   std::vector<Vec3> S_, A_;       // impulse and angular impulse since its last update
   long steps_ = 0, contact_evaluations_ = 0, bond_evaluations_ = 0, element_steps_ = 0, list_builds_ = 0;
