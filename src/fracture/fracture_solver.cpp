@@ -51,7 +51,7 @@ FractureSolver::FractureSolver(const Decomposition& decomp, BondedBlock block, F
   broken_.assign(block_.bonds.size(), 0);
   pose_cache_.resize(n), pose_epoch_.assign(n, -1);
   element_spheres_.assign(n, {});
-  skin_ = 0.25 * block_.min_edge;
+  skin_ = 0.1 * block_.min_edge;
   reach_.assign(n, 0.0);
   for (std::size_t e = 0; e < n; ++e)
     for (const Vec3& p : block_.vertices[e]) reach_[e] = std::max(reach_[e], norm(p));
@@ -133,8 +133,7 @@ void FractureSolver::setup(bool fresh) {
   t_el_.assign(n, time_);
   S_.assign(n, {}), A_.assign(n, {});
   for (std::size_t e = 0; e < block_.size(); ++e) {
-    const Vec3 Lb = q_[e].unrotate(L_[e]), &I = block_.inertia[e];
-    w_[e] = q_[e].rotate({Lb.x / I.x, Lb.y / I.y, Lb.z / I.z});
+    w_[e] = spin(e, q_[e].unrotate(L_[e]));
   }
   exchange();
   if (!fresh) return;  // a restart keeps the forces of the checkpoint (restore)
@@ -182,9 +181,7 @@ void FractureSolver::kick(double h) {
     const std::size_t i = static_cast<std::size_t>(e);
     v_[i] += F_[i] * (h / block_.mass[i]);
     L_[i] += T_[i] * h;
-    const Vec3 Lb = q_[i].unrotate(L_[i]);
-    const Vec3& I = block_.inertia[i];
-    w_[i] = q_[i].rotate({Lb.x / I.x, Lb.y / I.y, Lb.z / I.z});
+    w_[i] = spin(i, q_[i].unrotate(L_[i]));
   }
 }
 
@@ -193,10 +190,9 @@ void FractureSolver::drift() {
     const std::size_t i = static_cast<std::size_t>(e);
     x_[i] += v_[i] * dt_;
     Vec3 Lb = q_[i].unrotate(L_[i]);
-    const Vec3& I = block_.inertia[i];
-    free_rotation_step(q_[i], Lb, I, dt_);
+    free_rotation_step(q_[i], Lb, block_.inertia[i], dt_);
     L_[i] = q_[i].rotate(Lb);
-    w_[i] = q_[i].rotate({Lb.x / I.x, Lb.y / I.y, Lb.z / I.z});
+    w_[i] = spin(i, Lb);
   }
 }
 

@@ -145,8 +145,8 @@ class FractureSolver {
   const std::vector<Vec3>& force() const { return F_; }
 
  private:
-  // An element's state where a pair is evaluated, with its rotation matrix (rows), built once per
-  // element and evaluation moment (a sub-step) however many pairs read it.
+  // An element's state where a pair is evaluated, with its rotation matrix (rows); the uniform step
+  // builds it once per element and step however many pairs read it.
   struct Pose {
     Vec3 x, v, w;
     Quaternion q;
@@ -165,10 +165,15 @@ class FractureSolver {
   void exchange();
   void exchange_elements(const std::vector<std::vector<int>>& lists);  // x, q, v, w, clock of each list's rank
   double element_limit(std::size_t e) const;
-  const Pose& pose_at(std::size_t e, double t);  // on its piecewise-linear path (B10), cached likewise
+  Pose pose_at(std::size_t e, double t) const;  // on its piecewise-linear path (B10)
   void assign_levels();
   void advance_to(std::size_t e, double t);  // drift (x, q) from its clock to t
   void kick_impulse(std::size_t e);          // v += S / m, L += A
+  // The world angular velocity of element e at its orientation, from its body-frame momentum.
+  Vec3 spin(std::size_t e, const Vec3& L_body) const {
+    const Vec3& I = block_.inertia[e];
+    return q_[e].rotate({L_body.x / I.x, L_body.y / I.y, L_body.z / I.z});
+  }
   void multirate_step();
   void compute_forces(double t);  // t: the time of the state (the hole's pressure)
   const Pose& pose(std::size_t e);  // the current state (cached until new_epoch())
