@@ -6,6 +6,7 @@
 #include <numbers>
 #include <unordered_map>
 
+#include "core/all_gather.hpp"
 #include "core/errors.hpp"
 #include "core/exact_sum.hpp"
 
@@ -332,16 +333,7 @@ ContactListState FractureSolver::contact_list_state() const {
   std::vector<long> mine;
   for (const auto& [a, b] : pairs_)
     mine.insert(mine.end(), {spheres_[static_cast<std::size_t>(a)].key, spheres_[static_cast<std::size_t>(b)].key});
-  std::vector<long> all = mine;
-  if (decomp_.size() > 1) {
-    int n = static_cast<int>(mine.size());
-    std::vector<int> counts(static_cast<std::size_t>(decomp_.size())), displs(counts.size());
-    MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, decomp_.comm());
-    int total = 0;
-    for (std::size_t r = 0; r < counts.size(); ++r) displs[r] = total, total += counts[r];
-    all.resize(static_cast<std::size_t>(total));
-    MPI_Allgatherv(mine.data(), n, MPI_LONG, all.data(), counts.data(), displs.data(), MPI_LONG, decomp_.comm());
-  }
+  const std::vector<long> all = all_gather_concat(decomp_.comm(), mine);
   for (std::size_t k = 0; k + 1 < all.size(); k += 2) s.pairs.push_back({all[k], all[k + 1]});
   std::sort(s.pairs.begin(), s.pairs.end());
   s.pairs.erase(std::unique(s.pairs.begin(), s.pairs.end()), s.pairs.end());
@@ -429,18 +421,7 @@ void FractureSolver::bond_forces() {
 }
 
 void FractureSolver::share_broken() {
-  std::vector<int> all = newly_broken_;
-  if (decomp_.size() > 1) {
-    int mine = static_cast<int>(newly_broken_.size());
-    std::vector<int> counts(static_cast<std::size_t>(decomp_.size())), displs(counts.size());
-    MPI_Allgather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, decomp_.comm());
-    int total = 0;
-    for (std::size_t r = 0; r < counts.size(); ++r) displs[r] = total, total += counts[r];
-    if (total == 0) return;
-    all.resize(static_cast<std::size_t>(total));
-    MPI_Allgatherv(newly_broken_.data(), mine, MPI_INT, all.data(), counts.data(), displs.data(), MPI_INT,
-                   decomp_.comm());
-  }
+  std::vector<int> all = all_gather_concat(decomp_.comm(), newly_broken_);
   std::sort(all.begin(), all.end());
   for (int b : all) {
     broken_[static_cast<std::size_t>(b)] = 1;
