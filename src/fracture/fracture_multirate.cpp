@@ -153,7 +153,7 @@ void FractureSolver::multirate_step() {
           const BondGeometry& g = block_.bonds[static_cast<std::size_t>(b)];
           const std::size_t i = static_cast<std::size_t>(g.master), j = static_cast<std::size_t>(g.slave);
           ++bond_evaluations_;
-          const PairForce f = bond_force(static_cast<std::size_t>(b), pose_at(i, t), pose_at(j, t), h);
+          const PairForce f = bond_force(static_cast<std::size_t>(b), pose_at(i, t), pose_at(j, t));
           if (owner_[j] == rank) S_[j] += f.force * h, A_[j] += f.torque_j * h;
           if (owner_[i] == rank) S_[i] -= f.force * h, A_[i] += f.torque_i * h;
           if (f.failed) {

@@ -150,7 +150,6 @@ void FractureSolver::set_velocity(std::size_t e, const Vec3& v, const Vec3& w) {
   w_[e] = w;
 }
 
-void FractureSolver::set_position(std::size_t e, const Vec3& x) { x_[e] = x; }
 
 void FractureSolver::step() {
   if (settings_.stepping != Stepping::uniform) return multirate_step();
@@ -374,14 +373,13 @@ void FractureSolver::compute_forces(double time) {
   }
 }
 
-PairForce FractureSolver::bond_force(std::size_t b, const Pose& pi, const Pose& pj, double h) {
+PairForce FractureSolver::bond_force(std::size_t b, const Pose& pi, const Pose& pj) {
   const BondLaw& law = settings_.bond;
   const double cn = settings_.damping ? law.cn : 0, cs = settings_.damping ? law.cs : 0;
   const BondGeometry& g = block_.bonds[b];
   const Vec3 n = pi.rot(g.normal), xi = pi.rot(g.xi), eta = pi.rot(g.eta);
   const double share = g.area / 3;
   PairForce out;
-  (void)h;
   for (int k = 0; k < 3; ++k) {
     const Vec3 ri = pi.rot(g.at_master[k]), rj = pj.rot(g.at_slave[k]);
     const Vec3 u = (pj.x + rj) - (pi.x + ri);
@@ -413,7 +411,7 @@ void FractureSolver::bond_forces() {
     const bool own_i = owner_[i] == rank, own_j = owner_[j] == rank;
     if (!own_i && !own_j) continue;
     ++bond_evaluations_;
-    const PairForce f = bond_force(b, pose(i), pose(j), dt_);
+    const PairForce f = bond_force(b, pose(i), pose(j));
     if (own_j) F_[j] += f.force, T_[j] += f.torque_j;
     if (own_i) F_[i] -= f.force, T_[i] += f.torque_i;
     if (f.failed && own_i) newly_broken_.push_back(static_cast<int>(b));

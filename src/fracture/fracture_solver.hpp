@@ -120,7 +120,6 @@ class FractureSolver {
   void sync_state();
   // Sets an element's velocity (every rank alike; initial conditions and tests).
   void set_velocity(std::size_t e, const Vec3& v, const Vec3& w);
-  void set_position(std::size_t e, const Vec3& x);
 
   const std::vector<std::array<BondVertex, 3>>& bond_state() const { return bond_state_; }
   const std::vector<char>& broken() const { return broken_; }
@@ -178,8 +177,9 @@ class FractureSolver {
   void compute_forces(double t);  // t: the time of the state (the hole's pressure)
   const Pose& pose(std::size_t e);  // the current state (cached until new_epoch())
   void new_epoch() { ++epoch_; }
-  // B2-B5 on bond b (updates its state) and B7 on contact pair p, over a step h (the dashpots).
-  PairForce bond_force(std::size_t b, const Pose& master, const Pose& slave, double h);
+  // B2-B5 on bond b (updates its state); B7 on contact pair p over the pair's step h (its dashpot
+  // and friction are backward Euler over h).
+  PairForce bond_force(std::size_t b, const Pose& master, const Pose& slave);
   PairForce contact_force(std::size_t p, const Pose& a, const Pose& b, double h);
   void bond_forces();
   void contact_forces();
