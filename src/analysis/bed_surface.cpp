@@ -8,6 +8,7 @@
 #include <limits>
 #include <numbers>
 
+#include "core/all_gather.hpp"
 #include "core/exact_sum.hpp"
 #include "coupling/tet_clip.hpp"
 #include "solid/dem_solver.hpp"
@@ -57,15 +58,7 @@ std::vector<GrainTop> grain_tops(const DemSolver& dem) {
     for (const Vec3& node : shapes[p.shape[i] - 1].nodes) top = std::max(top, q.rotate(node).z);
     mine.insert(mine.end(), {double(p.id[i]), p.x[3 * i], p.x[3 * i + 1], p.x[3 * i + 2] + top});
   }
-  MPI_Comm comm = dem.decomposition().comm();
-  int size = 0;
-  MPI_Comm_size(comm, &size);
-  std::vector<int> counts(size), offsets(size, 0);
-  const int count = int(mine.size());
-  MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, comm);
-  for (int r = 1; r < size; ++r) offsets[r] = offsets[r - 1] + counts[r - 1];
-  std::vector<double> all(std::size_t(offsets[size - 1] + counts[size - 1]));
-  MPI_Allgatherv(mine.data(), count, MPI_DOUBLE, all.data(), counts.data(), offsets.data(), MPI_DOUBLE, comm);
+  const std::vector<double> all = all_gather_concat(dem.decomposition().comm(), mine);
   std::vector<std::size_t> order(all.size() / 4);
   for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
   std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return all[4 * a] < all[4 * b]; });

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <numeric>
 
+#include "core/all_gather.hpp"
 #include "solid/contact_kernel.hpp"
 #include "solid/dem_solver.hpp"
 #include "solid/triangle_contact.hpp"
@@ -163,16 +164,8 @@ void DemSolver::sum_mesh_loads() {
   if (!mesh_loads_pending_) return;
   mesh_loads_pending_ = false;
   auto& meshes = walls_.meshes();
-  const std::vector<double>& loads = mesh_loads_;
   constexpr int stride = 9;
-  int size = 1, mine = static_cast<int>(loads.size());
-  MPI_Comm comm = decomp_.comm();
-  MPI_Comm_size(comm, &size);
-  std::vector<int> counts(size), displs(size, 0);
-  MPI_Allgather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, comm);
-  for (int r = 1; r < size; ++r) displs[r] = displs[r - 1] + counts[r - 1];
-  std::vector<double> all(static_cast<std::size_t>(displs[size - 1] + counts[size - 1]));
-  MPI_Allgatherv(loads.data(), mine, MPI_DOUBLE, all.data(), counts.data(), displs.data(), MPI_DOUBLE, comm);
+  const std::vector<double> all = all_gather_concat(decomp_.comm(), mesh_loads_);
   const std::size_t n = all.size() / stride;
   std::vector<std::size_t> order(n);
   std::iota(order.begin(), order.end(), std::size_t{0});
