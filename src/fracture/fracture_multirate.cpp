@@ -80,6 +80,11 @@ void FractureSolver::assign_levels() {
   }
 }
 
+void FractureSolver::clear_buckets(std::vector<std::vector<int>>& buckets, int count) {
+  if (buckets.size() < static_cast<std::size_t>(count)) buckets.resize(static_cast<std::size_t>(count));
+  for (auto& b : buckets) b.clear();
+}
+
 void FractureSolver::multirate_step() {
   const int rank = decomp_.rank(), P = decomp_.size();
   {
@@ -89,7 +94,10 @@ void FractureSolver::multirate_step() {
   int K = 0;
   for (int k : level_) K = std::max(K, k);
   // Pairs by level (their finer element's); the list is checked with the macro step's travel ahead.
-  std::vector<std::vector<int>> bonds(static_cast<std::size_t>(K) + 1), contacts(static_cast<std::size_t>(K) + 1);
+  // The buckets are members: cleared each macro step, their storage kept.
+  auto& bonds = bond_buckets_;
+  auto& contacts = contact_buckets_;
+  clear_buckets(bonds, K + 1), clear_buckets(contacts, K + 1);
   {
     auto t = timers_.scope("contact_forces");
     if (!spheres_.empty()) {
@@ -113,7 +121,8 @@ void FractureSolver::multirate_step() {
   // evaluated, so it is updated at its finest pair's level; every rank learns these levels (one
   // reduction per macro step) and with them which states travel at each sub-step.
   const bool immediate = settings_.stepping == Stepping::stability;
-  std::vector<int> kick_level = level_;
+  std::vector<int>& kick_level = kick_level_;
+  kick_level = level_;
   if (immediate) {
     for (std::size_t b = 0; b < block_.bonds.size(); ++b) {
       if (broken_[b]) continue;
@@ -130,8 +139,9 @@ void FractureSolver::multirate_step() {
     if (P > 1) MPI_Allreduce(MPI_IN_PLACE, kick_level.data(), static_cast<int>(kick_level.size()), MPI_INT, MPI_MAX, decomp_.comm());
   }
   // Elements by owner and the level at which they are updated (every rank builds the same table).
-  std::vector<std::vector<std::vector<int>>> by_level(static_cast<std::size_t>(P),
-                                                      std::vector<std::vector<int>>(static_cast<std::size_t>(K) + 1));
+  auto& by_level = element_buckets_;
+  by_level.resize(static_cast<std::size_t>(P));
+  for (auto& levels : by_level) clear_buckets(levels, K + 1);
   for (std::size_t e = 0; e < block_.size(); ++e)
     by_level[static_cast<std::size_t>(owner_[e])][static_cast<std::size_t>(kick_level[e])].push_back(static_cast<int>(e));
 

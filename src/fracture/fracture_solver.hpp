@@ -174,6 +174,7 @@ class FractureSolver {
     return q_[e].rotate({L_body.x / I.x, L_body.y / I.y, L_body.z / I.z});
   }
   void multirate_step();
+  static void clear_buckets(std::vector<std::vector<int>>& buckets, int count);  // at least count, all empty
   void compute_forces(double t);  // t: the time of the state (the hole's pressure)
   const Pose& pose(std::size_t e);  // the current state (cached until new_epoch())
   void new_epoch() { ++epoch_; }
@@ -225,7 +226,10 @@ class FractureSolver {
   std::unordered_map<long, std::vector<int>> cells_;
   double cell_size_ = 1, cell_radius_ = 0;
   double dt_ = 0, time_ = 0, min_dt_ = 1e300, min_dt_time_ = 0;
-  std::vector<int> level_, stable_level_;
+  std::vector<int> level_, stable_level_, kick_level_;
+  // Per-level lists of the macro step (bonds, contact pairs; elements by owner), storage reused.
+  std::vector<std::vector<int>> bond_buckets_, contact_buckets_;
+  std::vector<std::vector<std::vector<int>>> element_buckets_;
   std::vector<Pose> pose_cache_;
   std::vector<long> pose_epoch_;
   long epoch_ = 0;
