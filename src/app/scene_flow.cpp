@@ -482,7 +482,9 @@ void FlowScene::begin_output(const RunOptions& opt) {
     if (coupled_)
       std::printf("  bodies: %ld, DEM stable step %.4g s, sub-steps %s\n", bodies,
                   coupled_->dem_stable_dt(),
-                  coupling_.substeps ? std::to_string(*coupling_.substeps).c_str() : "from each flow step's dt");
+                  coupling_.fixed_bodies ? "none (coupling.bodies: fixed)"
+                  : coupling_.substeps   ? std::to_string(*coupling_.substeps).c_str()
+                                         : "from each flow step's dt");
     if (drop_ && !opt.restart)  // a restart has no new drop: the drop is in the flow's state
       std::printf("  drop: centre %.4g m above the floor, %.4g m above the bed's top\n", shapes_.back().a.z,
                   shapes_.back().a.z - drop_->bed_top_height());
@@ -506,6 +508,7 @@ void FlowScene::begin_output(const RunOptions& opt) {
     fields_->add_field("solid_fraction", &coupled_->solid().fraction());
     if (coupled_->liquid_in_pores()) fields_->add_field("liquid_content", &coupled_->liquid().content());
     bodies_out_ = std::make_unique<SnapshotSeries>(opt.output_dir + "/snapshots");
+    bodies_out_->write_loads(coupled_->loads_computed());
     if (crater_)
       crater_->open(opt.output_dir, opt.restart.has_value() && fs::exists(opt.output_dir + "/crater.csv"), root);
     checks_ = Schedule(check_interval_, flow_->time());
@@ -523,6 +526,7 @@ void FlowScene::begin_output(const RunOptions& opt) {
 void FlowScene::write_snapshot() {
   fields_->write(*flow_);
   if (!bodies_out_) return;
+  coupled_->average_held_loads();  // fixed bodies: their loads over the interval
   bodies_out_->write(*dem_);
   write_scene_index();
   if (crater_ && !resuming_) crater_->sample(*dem_, flow_->time());
@@ -639,6 +643,11 @@ void FlowScene::summarise(nlohmann::json& s) {
   q["max_liquid_fraction"] = flow_->max_fraction();
   q["max_face_divergence"] = flow_->max_face_divergence();
   if (front_along_ >= 0) q["front_position"] = front_position();
+  // The volume flux out through each open side (m^3/s; negative: the flow comes in).
+  for (int d = 0; d < 3; ++d)
+    for (int side = 0; side < 2; ++side)
+      if (g.boundary(d, side) == BoundaryKind::outflow)
+        q["boundary_flux"][std::string(1, char('x' + d)) + (side ? "_high" : "_low")] = flow_->boundary_flux(d, side);
 
   s["cells"] = cells;
   s["poisson"] = {{"solver", flow_->poisson_description()},
@@ -661,6 +670,16 @@ void FlowScene::summarise(nlohmann::json& s) {
   s["quantities"]["body_volume"] = sp.body_volume;
   s["quantities"]["solid_volume_error"] = sp.body_volume > 0 ? (sp.solid_volume - sp.body_volume) / sp.body_volume : 0.0;
   s["quantities"]["max_solid_fraction"] = sp.max_fraction;
+  if (coupled_->loads_computed()) {  // the fluid's force and moment on all bodies together (C3)
+    coupled_->average_held_loads();
+    const ParticleStore& p = dem_->particles();
+    std::array<ExactSum, 6> sums;
+    for (std::size_t i = 0; i < p.owned; ++i)
+      for (int k = 0; k < 3; ++k) sums[k].add(p.f_ext[3 * i + k]), sums[3 + k].add(p.t_ext[3 * i + k]);
+    ExactSum::all_reduce(sums, decomp_->comm());
+    s["quantities"]["fluid_force_on_bodies"] = {sums[0].value(), sums[1].value(), sums[2].value()};
+    s["quantities"]["fluid_torque_on_bodies"] = {sums[3].value(), sums[4].value(), sums[5].value()};
+  }
   if (coupled_->liquid_in_pores()) {
     const double free = free_liquid_volume();
     s["quantities"]["free_liquid_volume"] = free;
@@ -674,7 +693,8 @@ void FlowScene::summarise(nlohmann::json& s) {
   s["coupling"] = {{"dem_stable_dt", coupled_->dem_stable_dt()},
                    {"layouts", layouts},
                    {"substeps_per_flow_step", steps_run ? double(substeps_total_) / steps_run : 0.0},
-                   {"fluid_force", coupling_.fluid_force}};
+                   {"fluid_force", coupling_.fluid_force},
+                   {"bodies", coupling_.fixed_bodies ? "fixed" : "moving"}};
   if (rest_.enabled()) rest_.report(s["quantities"], flow_->time());
   if (drop_) drop_->report(s["quantities"]);
   if (crater_) crater_->finish(*dem_, s["quantities"]);

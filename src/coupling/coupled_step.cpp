@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "coupling/coupled_step.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/errors.hpp"
@@ -13,6 +14,7 @@ CouplingSettings CouplingSettings::from_config(const ConfigNode& c) {
   if (c.has("substeps")) s.substeps = static_cast<int>(c.integer("substeps", 1, 1'000'000));
   s.fluid_force = c.flag("fluid_force", true);
   s.liquid_in_pores = c.flag("liquid_in_pores", true);
+  s.fixed_bodies = c.choice("bodies", {"moving", "fixed"}, "moving") == "fixed";
   s.layout_tolerance = c.real("layout_tolerance", Dim::none, Range::closed(0, 0.25), s.layout_tolerance);
   return s;
 }
@@ -20,11 +22,16 @@ CouplingSettings CouplingSettings::from_config(const ConfigNode& c) {
 CoupledSolver::CoupledSolver(FlowSolver& flow, DemSolver& dem, CouplingSettings settings)
     : flow_(flow), dem_(dem), settings_(settings), solid_(flow.grid(), dem, std::max(flow.settings().liquid.density, flow.settings().gas.density),
              settings.layout_tolerance), liquid_(flow.grid()), dem_stable_dt_(dem.dt()) {
-  dem_.use_external_loads(settings_.fluid_force);
-  flow_.keep_stress_divergence(settings_.fluid_force);
+  dem_.use_external_loads(settings_.fluid_force && !settings_.fixed_bodies);
+  flow_.keep_stress_divergence(loads_computed());
 }
 
 void CoupledSolver::start(bool fresh) {
+  if (settings_.fixed_bodies) {  // held at rest, ghost copies too
+    ParticleStore& p = dem_.particles();
+    std::fill(p.v.begin(), p.v.end(), 0.0);
+    std::fill(p.omega.begin(), p.omega.end(), 0.0);
+  }
   solid_.update(dem_);
   if (!fresh) {
     if (settings_.liquid_in_pores) liquid_.resume(solid_.fraction());
@@ -52,13 +59,15 @@ CoupledStepStats CoupledSolver::step(double dt) {
     st.flow = flow_.advance(dt);
     if (settings_.liquid_in_pores) liquid_.after_flow(flow_);
   }
-  if (settings_.fluid_force) {
+  if (loads_computed()) {
     auto t = timers_.scope("fluid_force");
     solid_.fluid_loads(flow_, dem_);
   }
-  st.substeps = substeps_for(dt);
-  st.dem_dt = dt / st.substeps;
-  {
+  if (settings_.fixed_bodies) {
+    dem_.set_clock(dem_.time() + dt, dem_.steps());  // held: the clock only (output times)
+  } else {
+    st.substeps = substeps_for(dt);
+    st.dem_dt = dt / st.substeps;
     auto t = timers_.scope("dem_substeps");
     dem_.advance(st.dem_dt, st.substeps);
   }
@@ -76,10 +85,34 @@ CoupledStepStats CoupledSolver::step(double dt) {
   }
   {
     auto t = timers_.scope("correction");
-    if (settings_.fluid_force) solid_.exchange_momentum(flow_, dem_);
+    if (settings_.fixed_bodies) {
+      solid_.held_exchange(flow_, dem_, dt);  // reported with C3's load (C4b)
+      const ParticleStore& p = dem_.particles();
+      held_impulse_.resize(6 * p.owned, 0.0);
+      for (std::size_t b = 0; b < p.owned; ++b)
+        for (int k = 0; k < 3; ++k) {
+          held_impulse_[6 * b + k] += p.f_ext[3 * b + k] * dt;
+          held_impulse_[6 * b + 3 + k] += p.t_ext[3 * b + k] * dt;
+        }
+      held_time_ += dt;
+    } else if (settings_.fluid_force) {
+      solid_.exchange_momentum(flow_, dem_);
+    }
     solid_.correct_velocity(flow_, dem_);
   }
   return st;
+}
+
+void CoupledSolver::average_held_loads() {
+  if (!settings_.fixed_bodies || held_time_ == 0) return;
+  ParticleStore& p = dem_.particles();  // held bodies never move, so their order never changes
+  for (std::size_t b = 0; b < p.owned; ++b)
+    for (int k = 0; k < 3; ++k) {
+      p.f_ext[3 * b + k] = held_impulse_[6 * b + k] / held_time_;
+      p.t_ext[3 * b + k] = held_impulse_[6 * b + 3 + k] / held_time_;
+    }
+  std::fill(held_impulse_.begin(), held_impulse_.end(), 0.0);
+  held_time_ = 0;
 }
 
 }  // namespace tessera

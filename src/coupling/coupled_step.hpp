@@ -12,11 +12,15 @@
 //                   (recorded around the flow stage) and what the moved bodies displaced (PoreLiquid, C7)
 //   correction      cell velocities become the mass average of fluid and bodies (C4)
 //
+// With `coupling.bodies: fixed` the DEM does not run (its clock follows the flow's): fluid_force
+// still records each body's load, the correction holds the bodies' cells at rest.
+//
 // The flow's pressure equation runs over the whole grid with the fluid's density in every cell:
 // inside a body the fluid is a virtual one that moves with it (docs/design.md, "Coupled step", says
 // why not the mixture density).
 #pragma once
 #include <optional>
+#include <vector>
 
 #include "core/config.hpp"
 #include "coupling/pore_liquid.hpp"
@@ -31,6 +35,10 @@ struct CouplingSettings {
   // The liquid kept in the cells' fluid part (C7). Off: the liquid fraction is advected over whole
   // cells, the bodies' insides included (the settling sphere, where C7 is not yet right: theory C7).
   bool liquid_in_pores = true;
+  // `bodies: fixed`: the bodies stay where they are, at rest (a fixed bed or array that the flow
+  // passes through): no DEM sub-steps and no exchange C4a; the fluid's force on each body (C3) is
+  // still computed and reported, not applied. `moving` (the default): the coupled step as above.
+  bool fixed_bodies = false;
   static CouplingSettings from_config(const ConfigNode& coupling);
 };
 
@@ -58,6 +66,14 @@ class CoupledSolver {
   const SolidPhase& solid() const { return solid_; }
   const PoreLiquid& liquid() const { return liquid_; }
   bool liquid_in_pores() const { return settings_.liquid_in_pores; }
+  bool fixed_bodies() const { return settings_.fixed_bodies; }
+  // The fluid's force on the bodies (C3) is computed each step: with `fluid_force` or fixed bodies.
+  bool loads_computed() const { return settings_.fluid_force || settings_.fixed_bodies; }
+  // Fixed bodies: their loads (C3 + C4b) become the mean over the steps since the last call (the
+  // impulse over the time), and the sums restart; nothing when no step was made since. The load of
+  // one step is not a steady body's force when dt changes: the velocity C4 leaves in a partly
+  // covered cell scales with the step before (theory C4b).
+  void average_held_loads();
   PoreLiquid& mutable_liquid() { return liquid_; }
   FlowSolver& flow() { return flow_; }
   DemSolver& dem() { return dem_; }
@@ -71,6 +87,8 @@ class CoupledSolver {
   PoreLiquid liquid_;
   double dem_stable_dt_ = 0;
   PhaseTimers timers_;
+  std::vector<double> held_impulse_;  // fixed bodies: 6 per owned body, since average_held_loads
+  double held_time_ = 0;
 };
 
 }  // namespace tessera

@@ -186,12 +186,14 @@ void SolidPhase::solid_momentum(const DemSolver& dem) {
 // linear in (V', w'): [(M + S0) 1, -[S3]x; [S3]x, I + S4] (V', w') = (M V + S1, I w + S2), with
 // S0 = sum mu, S1 = sum mu u, S2 = sum mu r x u, S3 = sum mu r, S4 = sum mu (|r|^2 1 - r r^T):
 // symmetric positive definite. Implicit, so a light body cannot overshoot.
-void SolidPhase::exchange_momentum(const FlowSolver& flow, DemSolver& dem) {
+// Per local body the 16 sums of C4a (S0, S1, S2, S3, S4's six entries), ghost shares added to the
+// owner's (in loads_, kExchangeWidth per body).
+void SolidPhase::exchange_sums(const FlowSolver& flow, DemSolver& dem) {
   const FluidGrid& g = grid_;
   ParticleStore& p = dem.particles();
   const double cell_volume = g.cell_volume();
   const auto& rho_f = flow.density();
-  constexpr int kWidth = 16;
+  constexpr int kWidth = kExchangeWidth;
   loads_.assign(kWidth * p.size(), 0.0);
   for (std::size_t n = 0; n < body_index_.size(); ++n) {
     const std::size_t b = body_index_[n];
@@ -216,8 +218,13 @@ void SolidPhase::exchange_momentum(const FlowSolver& flow, DemSolver& dem) {
     }
   }
   dem.reverse_add_ghosts(loads_, kWidth);
+}
+
+void SolidPhase::exchange_momentum(const FlowSolver& flow, DemSolver& dem) {
+  exchange_sums(flow, dem);
+  ParticleStore& p = dem.particles();
   for (std::size_t b = 0; b < p.owned; ++b) {
-    const double* a = &loads_[kWidth * b];
+    const double* a = &loads_[kExchangeWidth * b];
     if (a[0] == 0) continue;
     const ShapeTemplate& t = dem.shapes()[static_cast<std::size_t>(p.shape[b] - 1)];
     const double rho = p.mass[b] / t.volume;
@@ -252,6 +259,16 @@ void SolidPhase::exchange_momentum(const FlowSolver& flow, DemSolver& dem) {
     for (int k = 0; k < 3; ++k) p.v[3 * b + k] = x[k], p.omega[3 * b + k] = x[3 + k];
   }
   dem.refresh_ghosts();
+}
+
+void SolidPhase::held_exchange(const FlowSolver& flow, DemSolver& dem, double dt) {
+  exchange_sums(flow, dem);
+  ParticleStore& p = dem.particles();
+  for (std::size_t b = 0; b < p.owned; ++b)
+    for (int k = 0; k < 3; ++k) {
+      p.f_ext[3 * b + k] += loads_[kExchangeWidth * b + 1 + k] / dt;
+      p.t_ext[3 * b + k] += loads_[kExchangeWidth * b + 4 + k] / dt;
+    }
 }
 
 void SolidPhase::fluid_loads(const FlowSolver& flow, DemSolver& dem) {

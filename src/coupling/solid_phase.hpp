@@ -13,6 +13,10 @@
 //   exchange_momentum()  the no-slip exchange between each body and the fluid in its cells, implicit
 //                        (C4a): the body's velocity and spin after the exchange solve one 6 x 6
 //                        system; the fluid loses exactly what the body gains.
+//   held_exchange()      for bodies held at rest (`coupling.bodies: fixed`): C4a with the body's
+//                        velocity kept at 0, i.e. the momentum C4 takes from the fluid in the body's
+//                        cells, sum_c mu_c u_c (and sum_c mu_c r_c x u_c), added over dt to the
+//                        body's reported load (C3 + C4b): the whole force of the flow on it.
 //   correct_velocity()   the cell velocity becomes the mass average of the fluid in the cell and the
 //                        solid in it (C4): u = (rho_f V_f u + sum_b rho_b V_bc u_b) / (rho_f V_f + m_s).
 //
@@ -57,6 +61,7 @@ class SolidPhase {
   void update(const DemSolver& dem);
   void fluid_loads(const FlowSolver& flow, DemSolver& dem);
   void exchange_momentum(const FlowSolver& flow, DemSolver& dem);
+  void held_exchange(const FlowSolver& flow, DemSolver& dem, double dt);  // after fluid_loads
   void correct_velocity(FlowSolver& flow, const DemSolver& dem);
 
   // Ghosted layout of the grid (owned cells set, ghosts exchanged).
@@ -79,6 +84,8 @@ class SolidPhase {
   std::vector<double> volume_;
   double body_volume_ = 0;  // owned bodies
   std::vector<double> loads_;  // 6 per local body (reverse communication); 16 in the exchange
+  static constexpr int kExchangeWidth = 16;
+  void exchange_sums(const FlowSolver& flow, DemSolver& dem);
   void solid_momentum(const DemSolver& dem);  // P_s per cell from the bodies' velocities now
   TetRasterizer raster_;
   // Lay-outs by body order key, kept while the body's rounded pose is unchanged.

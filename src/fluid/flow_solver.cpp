@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "core/errors.hpp"
+#include "core/exact_sum.hpp"
 #include "fluid/plic.hpp"
 
 namespace tessera {
@@ -614,6 +615,20 @@ double FlowSolver::max_face_divergence() const {
     m = std::max(m, std::abs(div));
   });
   return g.reduce_max(m);
+}
+
+double FlowSolver::boundary_flux(int d, int side) const {
+  const FluidGrid& g = *grid_;
+  ExactSum sum;
+  if (g.at_domain_edge(d, side)) {
+    std::array<int, 3> lo{g.begin(0), g.begin(1), g.begin(2)}, hi{g.end(0), g.end(1), g.end(2)};
+    lo[d] = side == 0 ? 0 : g.cells()[d];  // the face below cell lo[d]: the domain's side
+    hi[d] = lo[d] + 1;
+    const double area = g.cell_volume() / g.h(d), sign = side == 0 ? -1.0 : 1.0;
+    for_box(lo, hi, [&](int i, int j, int k) { sum.add(sign * area * uf_[d][g.at(i, j, k)]); });
+  }
+  sum.all_reduce(g.comm());
+  return sum.value();
 }
 
 double FlowSolver::min_fraction() const {

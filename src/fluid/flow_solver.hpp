@@ -111,6 +111,10 @@ class FlowSolver {
   double kinetic_energy() const;
   double max_speed() const;
   double max_face_divergence() const;  // max |div u_f| (1/s)
+  // Collective: the volume flux out of the domain through side `side` (0 low, 1 high) of direction
+  // d (m^3/s, negative where the flow comes in), from the projected face velocities, summed exactly
+  // (the same bits on any rank count). 0 on a wall; not defined on a periodic side (0).
+  double boundary_flux(int d, int side) const;
   double min_fraction() const;
   double max_fraction() const;
 

@@ -31,7 +31,7 @@ int comm_rank(MPI_Comm c) {
 }
 
 // One snapshot's bodies: a Polyvertex grid (file: the HDF5 path as the index sees it).
-std::string bodies_grid(double time, const std::string& file, long n) {
+std::string bodies_grid(double time, const std::string& file, long n, bool loads) {
   std::ostringstream o;
   o << std::setprecision(17);
   auto item = [&](const std::string& ds, int cols) {
@@ -55,8 +55,13 @@ std::string bodies_grid(double time, const std::string& file, long n) {
     << "</Attribute>\n"
     << "    <Attribute Name=\"id\" AttributeType=\"Scalar\" Center=\"Node\">" << item("id", 1) << "</Attribute>\n"
     << "    <Attribute Name=\"shape\" AttributeType=\"Scalar\" Center=\"Node\">" << item("shape", 1)
-    << "</Attribute>\n"
-    << "   </Grid>\n";
+    << "</Attribute>\n";
+  if (loads)
+    o << "    <Attribute Name=\"external_force\" AttributeType=\"Vector\" Center=\"Node\">"
+      << item("external_force", 3) << "</Attribute>\n"
+      << "    <Attribute Name=\"external_torque\" AttributeType=\"Vector\" Center=\"Node\">"
+      << item("external_torque", 3) << "</Attribute>\n";
+  o << "   </Grid>\n";
   return o.str();
 }
 
@@ -111,6 +116,10 @@ void SnapshotSeries::write(DemSolver& dem) {
     f.write_rows("id", p.id.data(), m, 1);
     std::vector<double> shape(p.shape.begin(), p.shape.begin() + static_cast<std::ptrdiff_t>(m));
     f.write_rows("shape", shape.data(), m, 1);
+    if (loads_) {
+      f.write_rows("external_force", p.f_ext.data(), m, 3);
+      f.write_rows("external_torque", p.t_ext.data(), m, 3);
+    }
     f.set_attribute("time", dem.time());
     if (dem.shaped()) {
       // Template surface nodes at x + R(q) X (velocity v + w x R(q) X); triangles indexed globally:
@@ -142,7 +151,7 @@ void SnapshotSeries::write(DemSolver& dem) {
       f.write_rows("surface_id", ids.data(), ids.size(), 1);
     }
   }
-  entries_.push_back({dem.time(), name, n, surface_nodes, surface_triangles});
+  entries_.push_back({dem.time(), name, n, surface_nodes, surface_triangles, loads_});
   if (comm_rank(comm) == 0) {
     std::string bodies, grains;
     for (std::size_t k = 0; k < entries_.size(); ++k) {
@@ -157,7 +166,7 @@ void SnapshotSeries::write(DemSolver& dem) {
 std::string SnapshotSeries::grid_xml(std::size_t k, const std::string& prefix, bool surfaces) const {
   const Entry& e = entries_.at(k);
   return surfaces ? grains_grid(e.time, prefix + e.file, e.surface_nodes, e.surface_triangles)
-                  : bodies_grid(e.time, prefix + e.file, e.bodies);
+                  : bodies_grid(e.time, prefix + e.file, e.bodies, e.loads);
 }
 
 void write_checkpoint(const std::string& path, DemSolver& dem, const CheckpointExtras& extras) {

@@ -15,6 +15,9 @@ namespace tessera {
 class SnapshotSeries {
  public:
   explicit SnapshotSeries(std::string dir) : dir_(std::move(dir)) {}
+  // On: each snapshot also holds the bodies' external loads (ParticleStore::f_ext, t_ext: the
+  // fluid's force and moment in a coupled run) as external_force and external_torque.
+  void write_loads(bool on) { loads_ = on; }
   // Collective: writes DIR/particles_NNNNNN.h5 and rewrites DIR/particles.xmf; with shaped bodies
   // also DIR/grains.xmf: each body's template surface (triangles) placed at its position and
   // orientation, so that ParaView draws every grain's shape. Completes the step first (DemSolver::complete_step).
@@ -31,8 +34,10 @@ class SnapshotSeries {
     std::string file;
     long bodies;
     long surface_nodes = 0, surface_triangles = 0;
+    bool loads = false;
   };
   std::string dir_;
+  bool loads_ = false;
   std::vector<Entry> entries_;
 };
 

@@ -89,6 +89,13 @@ long count_differences(const BodyStates& a, const BodyStates& b, const char* wha
   return diff + static_cast<long>(b.size() > a.size() ? b.size() - a.size() : 0);
 }
 
+std::string last_file(const std::string& dir, const std::string& ext) {
+  std::string last;
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    if (e.path().extension() == ext && e.path().string() > last) last = e.path().string();
+  return last;
+}
+
 std::string file_text(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error("cannot read " + path);

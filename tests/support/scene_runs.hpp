@@ -35,6 +35,9 @@ BodyStates run_scene_on(int ranks, const std::string& yaml, const std::vector<st
 // The text of a file (a shipped case read by a test).
 std::string file_text(const std::string& path);
 
+// The last file of DIR with extension `ext` (".h5") in name order: a run's last snapshot.
+std::string last_file(const std::string& dir, const std::string& ext);
+
 // Number of bodies whose states differ bitwise (missing bodies count too); prints the first few.
 long count_differences(const BodyStates& a, const BodyStates& b, const char* what);
 
