@@ -15,6 +15,8 @@
 // (one row per series_interval: time, dt and its limit, Poisson iterations and residual, liquid
 // volume, kinetic energy, maximum speed, front position), DIR/fields/fields.xmf (ParaView) and
 // DIR/checkpoint.h5 (restart with --restart, also written on SIGTERM / SIGUSR1).
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -232,6 +234,7 @@ class FlowScene final : public SteppedScene {
     return liquid_volume() - coupled_->liquid().volume_in_bodies(coupled_->solid().fraction());
   }
   long substeps_total_ = 0;
+  std::array<double, 2> step_range_{std::numeric_limits<double>::infinity(), 0.0};  // coupled steps, this run
   SettleCriterion rest_;  // bodies.settled_kinetic_energy: the run ends when the bodies are at rest
   // The drop-impact scene (sections drop and crater).
   std::optional<DropOnBed> drop_;
@@ -573,6 +576,7 @@ void FlowScene::step(const RunOptions& opt) {
       pore_passes_max_ = std::max(pore_passes_max_, cs.liquid.passes);
       pore_residual_max_ = std::max(pore_residual_max_, cs.liquid.residual);
       substeps_total_ += cs.substeps;
+      step_range_[0] = std::min(step_range_[0], dt), step_range_[1] = std::max(step_range_[1], dt);
     } else {
       last_ = flow_->advance(dt);
     }
@@ -695,6 +699,13 @@ void FlowScene::summarise(nlohmann::json& s) {
                    {"substeps_per_flow_step", steps_run ? double(substeps_total_) / steps_run : 0.0},
                    {"fluid_force", coupling_.fluid_force},
                    {"bodies", coupling_.fixed_bodies ? "fixed" : "moving"}};
+  // The leak number dt nu / h^2 (liquid, smallest cell side) over this run's steps: how much flow the
+  // partly covered cells let through scales with it (docs/validation.md, the packed bed).
+  if (steps_run > 0) {
+    const double nu = flow_->settings().liquid.viscosity / flow_->settings().liquid.density;
+    const double h = std::min({g.h(0), g.h(1), g.h(2)});
+    s["coupling"]["leak_number"] = {step_range_[0] * nu / (h * h), step_range_[1] * nu / (h * h)};
+  }
   if (rest_.enabled()) rest_.report(s["quantities"], flow_->time());
   if (drop_) drop_->report(s["quantities"]);
   if (crater_) crater_->finish(*dem_, s["quantities"]);
