@@ -46,7 +46,7 @@ def main():
         out = os.path.join(a.out, f"{a.case}_{per_d}")
         done = os.path.exists(os.path.join(out, "summary.json"))
         if not done:
-            cmd = ["mpirun", "-n", str(a.ranks), os.path.join(root, "build/bin/tessera"), "run",
+            cmd = ["mpirun", "-n", str(a.ranks), os.environ.get("TESSERA", os.path.join(root, "build/bin/tessera")), "run",
                    os.path.join(root, "cases/coupled/settling_sphere.yaml"), "--output", out, "--quiet",
                    "--set", f"fluid.cells={cells}", "--set", f"fluid.liquid.density={rho}",
                    "--set", f"fluid.liquid.viscosity={mu} Pa*s", "--set", "output.snapshot_interval=0"]

@@ -16,12 +16,14 @@ CouplingSettings CouplingSettings::from_config(const ConfigNode& c) {
   s.liquid_in_pores = c.flag("liquid_in_pores", true);
   s.fixed_bodies = c.choice("bodies", {"moving", "fixed"}, "moving") == "fixed";
   s.layout_tolerance = c.real("layout_tolerance", Dim::none, Range::closed(0, 0.25), s.layout_tolerance);
+  s.partial.per_step = c.choice("partial_cells", {"rate", "step"}, "rate") == "step";
+  s.partial.rate = c.real("partial_cell_rate", Dim::none, Range::positive(), s.partial.rate);
   return s;
 }
 
 CoupledSolver::CoupledSolver(FlowSolver& flow, DemSolver& dem, CouplingSettings settings)
     : flow_(flow), dem_(dem), settings_(settings), solid_(flow.grid(), dem, std::max(flow.settings().liquid.density, flow.settings().gas.density),
-             settings.layout_tolerance), liquid_(flow.grid()), dem_stable_dt_(dem.dt()) {
+             settings.layout_tolerance, settings.partial), liquid_(flow.grid()), dem_stable_dt_(dem.dt()) {
   dem_.use_external_loads(settings_.fluid_force && !settings_.fixed_bodies);
   flow_.keep_stress_divergence(loads_computed());
 }
@@ -41,7 +43,7 @@ void CoupledSolver::start(bool fresh) {
     liquid_.start(flow_, solid_.fraction());
     liquid_.settle(flow_, solid_.fraction());
   }
-  solid_.correct_velocity(flow_, dem_);
+  solid_.correct_velocity(flow_, dem_, 0.0);
 }
 
 int CoupledSolver::substeps_for(double dt) const {
@@ -56,6 +58,7 @@ CoupledStepStats CoupledSolver::step(double dt) {
   {
     auto t = timers_.scope("flow");
     if (settings_.liquid_in_pores) liquid_.before_flow(flow_);
+    flow_.set_cell_drag(solid_.drag(flow_, dem_, dt));  // C4c: partly covered cells, in the projection
     st.flow = flow_.advance(dt);
     if (settings_.liquid_in_pores) liquid_.after_flow(flow_);
   }
@@ -96,9 +99,9 @@ CoupledStepStats CoupledSolver::step(double dt) {
         }
       held_time_ += dt;
     } else if (settings_.fluid_force) {
-      solid_.exchange_momentum(flow_, dem_);
+      solid_.exchange_momentum(flow_, dem_, dt);
     }
-    solid_.correct_velocity(flow_, dem_);
+    solid_.correct_velocity(flow_, dem_, dt);
   }
   return st;
 }

@@ -10,7 +10,7 @@
 //   solid_fraction  the moved tetrahedra laid over the cells again (SolidPhase::update, C1-C2)
 //   pore_liquid     the liquid kept in the cells' fluid part: what the flow carried across faces
 //                   (recorded around the flow stage) and what the moved bodies displaced (PoreLiquid, C7)
-//   correction      cell velocities become the mass average of fluid and bodies (C4)
+//   correction      cell velocities move to the bodies' (C4; partly covered cells: C4c)
 //
 // With `coupling.bodies: fixed` the DEM does not run (its clock follows the flow's): fluid_force
 // still records each body's load, the correction holds the bodies' cells at rest.
@@ -39,6 +39,10 @@ struct CouplingSettings {
   // passes through): no DEM sub-steps and no exchange C4a; the fluid's force on each body (C3) is
   // still computed and reported, not applied. `moving` (the default): the coupled step as above.
   bool fixed_bodies = false;
+  // A partly covered cell: `partial_cells: rate` (relaxes towards the solid's velocity at the rate
+  // `partial_cell_rate` nu alpha / ((1 - alpha) h^2), whatever the step) or `step` (the seed's
+  // mass average every step). Theory C4c.
+  PartialCells partial;
   static CouplingSettings from_config(const ConfigNode& coupling);
 };
 

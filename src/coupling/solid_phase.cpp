@@ -12,8 +12,10 @@
 
 namespace tessera {
 
-SolidPhase::SolidPhase(const FluidGrid& grid, const DemSolver& dem, double fluid_density, double layout_tolerance)
-    : grid_(grid), layout_step_(layout_tolerance * std::min({grid.h(0), grid.h(1), grid.h(2)})) {
+SolidPhase::SolidPhase(const FluidGrid& grid, const DemSolver& dem, double fluid_density, double layout_tolerance,
+                       PartialCells partial)
+    : grid_(grid), partial_(partial), layout_step_(layout_tolerance * std::min({grid.h(0), grid.h(1), grid.h(2)})) {
+  for (int d = 0; d < 3; ++d) inv_h2_ += 1 / (3 * grid.h(d) * grid.h(d));
   const ParticleStore& p = dem.particles();
   int spheres = 0;
   for (std::size_t i = 0; i < p.owned; ++i) spheres |= p.shape[i] == 0;
@@ -188,7 +190,48 @@ void SolidPhase::solid_momentum(const DemSolver& dem) {
 // symmetric positive definite. Implicit, so a light body cannot overshoot.
 // Per local body the 16 sums of C4a (S0, S1, S2, S3, S4's six entries), ghost shares added to the
 // owner's (in loads_, kExchangeWidth per body).
-void SolidPhase::exchange_sums(const FlowSolver& flow, DemSolver& dem) {
+double SolidPhase::cell_rate(const FlowSolver& flow, std::size_t c) const {
+  const double a = alpha_[c];
+  return partial_.rate * flow.viscosity()[c] / flow.density()[c] * inv_h2_ * a / (1 - a);
+}
+
+// `rate`: what the projection's drag (lambda dt capped at kMaxDrag) left of the relaxation
+// 1 / (1 + lambda dt): 1 - (1 + D_projection) / (1 + lambda dt).
+double SolidPhase::pull(const FlowSolver& flow, std::size_t c, double mf, double ms, double dt) const {
+  if (partial_.per_step) return ms / (mf + ms);
+  const double lambda_dt = cell_rate(flow, c) * dt;
+  return std::max(0.0, lambda_dt - kMaxDrag) / (1 + lambda_dt);
+}
+
+const CellDrag* SolidPhase::drag(const FlowSolver& flow, const DemSolver& dem, double dt) {
+  if (partial_.per_step) return nullptr;
+  const FluidGrid& g = grid_;
+  if (drag_.rate.empty()) {
+    drag_.rate = g.make_field();
+    for (auto& v : drag_.velocity) v = g.make_field();
+  }
+  solid_momentum(dem);  // the bodies' velocities now
+  const auto& rho = flow.density();
+  for (int k = g.begin(2); k < g.end(2); ++k)
+    for (int j = g.begin(1); j < g.end(1); ++j)
+      for (int i = g.begin(0); i < g.end(0); ++i) {
+        const std::size_t c = g.at(i, j, k);
+        const double ms = solid_mass_[c];
+        const double mf = rho[c] * g.cell_volume() * std::max(0.0, 1 - alpha_[c]);
+        if (ms == 0 || mf == 0) {  // no solid; or covered: the correction gives it the solid's velocity
+          drag_.rate[c] = 0;
+          for (auto& v : drag_.velocity) v[c] = 0;
+          continue;
+        }
+        drag_.rate[c] = std::min(cell_rate(flow, c), kMaxDrag / dt);
+        for (int d = 0; d < 3; ++d) drag_.velocity[d][c] = solid_momentum_[d][c] / ms;
+      }
+  g.exchange({&drag_.rate, &drag_.velocity[0], &drag_.velocity[1], &drag_.velocity[2]});
+  drag_dt_ = dt;
+  return &drag_;
+}
+
+void SolidPhase::exchange_sums(const FlowSolver& flow, DemSolver& dem, double dt) {
   const FluidGrid& g = grid_;
   ParticleStore& p = dem.particles();
   const double cell_volume = g.cell_volume();
@@ -204,7 +247,9 @@ void SolidPhase::exchange_sums(const FlowSolver& flow, DemSolver& dem) {
       const std::size_t c = cell_[e];
       const double mf = rho_f[c] * cell_volume * std::max(0.0, 1 - alpha_[c]);
       if (mf == 0) continue;
-      const double mu = mf * rho * volume_[e] / (mf + solid_mass_[c]);
+      // The fluid's momentum moves by m_f chi (U' - u), chi = pull(); body b's share is m_bc / m_s.
+      const double mu = partial_.per_step ? mf * rho * volume_[e] / (mf + solid_mass_[c])
+                                          : mf * pull(flow, c, mf, solid_mass_[c], dt) * rho * volume_[e] / solid_mass_[c];
       const auto idx = g.index(c);
       const Vec3 r = g.centre(idx[0], idx[1], idx[2]) - xb;
       const Vec3 u{flow.velocity(0)[c], flow.velocity(1)[c], flow.velocity(2)[c]};
@@ -220,8 +265,8 @@ void SolidPhase::exchange_sums(const FlowSolver& flow, DemSolver& dem) {
   dem.reverse_add_ghosts(loads_, kWidth);
 }
 
-void SolidPhase::exchange_momentum(const FlowSolver& flow, DemSolver& dem) {
-  exchange_sums(flow, dem);
+void SolidPhase::exchange_momentum(const FlowSolver& flow, DemSolver& dem, double dt) {
+  exchange_sums(flow, dem, dt);
   ParticleStore& p = dem.particles();
   for (std::size_t b = 0; b < p.owned; ++b) {
     const double* a = &loads_[kExchangeWidth * b];
@@ -262,7 +307,7 @@ void SolidPhase::exchange_momentum(const FlowSolver& flow, DemSolver& dem) {
 }
 
 void SolidPhase::held_exchange(const FlowSolver& flow, DemSolver& dem, double dt) {
-  exchange_sums(flow, dem);
+  exchange_sums(flow, dem, dt);
   ParticleStore& p = dem.particles();
   for (std::size_t b = 0; b < p.owned; ++b)
     for (int k = 0; k < 3; ++k) {
@@ -275,10 +320,12 @@ void SolidPhase::fluid_loads(const FlowSolver& flow, DemSolver& dem) {
   const FluidGrid& g = grid_;
   ParticleStore& p = dem.particles();
   const bool viscous = !flow.stress_divergence(0).empty();
+  const bool dragged = drag_dt_ > 0;
   loads_.assign(6 * p.size(), 0.0);
   for (std::size_t n = 0; n < body_index_.size(); ++n) {
     const std::size_t b = body_index_[n];
     const Vec3 xb = p.pos(b);
+    const double rho_b = p.mass[b] / dem.shapes()[static_cast<std::size_t>(p.shape[b] - 1)].volume;
     Vec3 force, moment;
     for (std::size_t e = body_first_[n]; e < body_first_[n + 1]; ++e) {
       const std::size_t c = cell_[e];
@@ -286,7 +333,14 @@ void SolidPhase::fluid_loads(const FlowSolver& flow, DemSolver& dem) {
       Vec3 density = flow.pressure_force(idx[0], idx[1], idx[2]);  // N/m^3
       if (viscous)
         for (int d = 0; d < 3; ++d) density[d] += flow.stress_divergence(d)[c];
-      const Vec3 f = density * volume_[e];
+      Vec3 f = density * volume_[e];
+      if (dragged && drag_.rate[c] > 0) {
+        // The projection pulled the cell's fluid, m_f = rho (1 - alpha_s) V_c, by the force
+        // m_f lambda (U - u) (u after the step); the body takes the opposite, its share m_bc / m_s.
+        const double mf = flow.density()[c] * g.cell_volume() * (1 - alpha_[c]);
+        const double k = mf * drag_.rate[c] * rho_b * volume_[e] / solid_mass_[c];
+        for (int d = 0; d < 3; ++d) f[d] += k * (flow.velocity(d)[c] - drag_.velocity[d][c]);
+      }
       force += f;
       moment += cross(g.centre(idx[0], idx[1], idx[2]) - xb, f);
     }
@@ -301,7 +355,7 @@ void SolidPhase::fluid_loads(const FlowSolver& flow, DemSolver& dem) {
     }
 }
 
-void SolidPhase::correct_velocity(FlowSolver& flow, const DemSolver& dem) {
+void SolidPhase::correct_velocity(FlowSolver& flow, const DemSolver& dem, double dt) {
   solid_momentum(dem);  // from the bodies' velocities now (after the DEM and the exchange)
   const FluidGrid& g = grid_;
   const double cell_volume = g.cell_volume();
@@ -314,7 +368,12 @@ void SolidPhase::correct_velocity(FlowSolver& flow, const DemSolver& dem) {
         const double ms = solid_mass_[c];
         if (ms == 0) continue;
         const double mf = rho[c] * cell_volume * std::max(0.0, 1 - alpha_[c]);
-        for (int d = 0; d < 3; ++d) (*u[d])[c] = (mf * (*u[d])[c] + solid_momentum_[d][c]) / (mf + ms);
+        if (partial_.per_step || mf == 0) {  // the mass average (C4); a covered cell: the solid's velocity
+          for (int d = 0; d < 3; ++d) (*u[d])[c] = (mf * (*u[d])[c] + solid_momentum_[d][c]) / (mf + ms);
+          continue;
+        }
+        const double chi = pull(flow, c, mf, ms, dt);  // C4c
+        for (int d = 0; d < 3; ++d) (*u[d])[c] += chi * (solid_momentum_[d][c] / ms - (*u[d])[c]);
       }
   flow.velocity_changed();
 }

@@ -17,8 +17,10 @@
 //                        velocity kept at 0, i.e. the momentum C4 takes from the fluid in the body's
 //                        cells, sum_c mu_c u_c (and sum_c mu_c r_c x u_c), added over dt to the
 //                        body's reported load (C3 + C4b): the whole force of the flow on it.
-//   correct_velocity()   the cell velocity becomes the mass average of the fluid in the cell and the
-//                        solid in it (C4): u = (rho_f V_f u + sum_b rho_b V_bc u_b) / (rho_f V_f + m_s).
+//   correct_velocity()   the cell velocity moves towards the solid's: a cell the bodies cover takes
+//                        their velocity; a partly covered one relaxes towards it at a rate that does
+//                        not depend on the step (C4c, `PartialCells`), or, as the seed does, takes the
+//                        mass average of its fluid and solid every step (C4).
 //
 // Every body that overlaps a rank's cells is there, owned or as a ghost: the DEM copies a body to a
 // neighbour when its centre is within r + r_max + skin of the face, and the constructor checks that
@@ -38,6 +40,20 @@
 
 namespace tessera {
 
+// How the correction treats a cell the bodies cover in part (theory C4c).
+struct PartialCells {
+  // `step` (the seed's MICS): every flow step the cell takes the mass average of its fluid and its
+  // solid, u <- (m_f u + P_s) / (m_f + m_s): the flow a partly covered cell lets through then scales
+  // with the step and with the solid's density. `rate` (the default): the cell is pulled towards the
+  // solid's velocity U = P_s / m_s at the rate lambda = kappa nu alpha_s / ((1 - alpha_s) h^2), a
+  // drag implicit in the flow's projection (FlowSolver's CellDrag) up to lambda dt = kMaxDrag, the
+  // rest of it by the correction: u <- (u + lambda dt U) / (1 + lambda dt) in all.
+  bool per_step = false;
+  // kappa: chosen on the cubic sphere array of docs/validation.md (c = 0.216, 12 and 16 cells per
+  // spacing); theory C4c.
+  double rate = 25;
+};
+
 struct SolidPhaseStats {
   double solid_volume = 0;  // sum of alpha_s V_c over the grid (collective)
   double body_volume = 0;   // sum of the bodies' tetrahedra volumes (owned bodies, collective)
@@ -55,14 +71,22 @@ class SolidPhase {
   // no node of its shape by more than the step), and its lay-out is reused while that rounded pose is
   // unchanged: a bed at rest is laid out once. The solid volume stays exact; every node of the body
   // sits in the grid within (1 + sqrt(3)/2) steps of its place (theory C1).
-  SolidPhase(const FluidGrid& grid, const DemSolver& dem, double fluid_density, double layout_tolerance = 0);
+  SolidPhase(const FluidGrid& grid, const DemSolver& dem, double fluid_density, double layout_tolerance = 0,
+             PartialCells partial = {});
   static constexpr double kMinDensityRatio = 0.3;
 
   void update(const DemSolver& dem);
+  // Before a flow step dt (`rate`): each partly covered cell's drag towards the bodies' velocity now,
+  // for FlowSolver::set_cell_drag; nullptr with the seed's correction.
+  const CellDrag* drag(const FlowSolver& flow, const DemSolver& dem, double dt);
+  static constexpr double kMaxDrag = 100;  // lambda dt in the projection at most (its coefficients)
+  // The fluid force and moment (C3, and the drag's reaction where the projection pulled the cells).
   void fluid_loads(const FlowSolver& flow, DemSolver& dem);
-  void exchange_momentum(const FlowSolver& flow, DemSolver& dem);
+  // dt: the flow step the exchange and the correction stand for (0 at the start: a partly covered
+  // cell is left as it is, unless the correction is the seed's per-step one).
+  void exchange_momentum(const FlowSolver& flow, DemSolver& dem, double dt);
   void held_exchange(const FlowSolver& flow, DemSolver& dem, double dt);  // after fluid_loads
-  void correct_velocity(FlowSolver& flow, const DemSolver& dem);
+  void correct_velocity(FlowSolver& flow, const DemSolver& dem, double dt);
 
   // Ghosted layout of the grid (owned cells set, ghosts exchanged).
   const std::vector<double>& fraction() const { return alpha_; }
@@ -85,7 +109,15 @@ class SolidPhase {
   double body_volume_ = 0;  // owned bodies
   std::vector<double> loads_;  // 6 per local body (reverse communication); 16 in the exchange
   static constexpr int kExchangeWidth = 16;
-  void exchange_sums(const FlowSolver& flow, DemSolver& dem);
+  void exchange_sums(const FlowSolver& flow, DemSolver& dem, double dt);
+  // The share of the way from its velocity to the solid's U = P_s / m_s that cell c goes in the
+  // correction over dt (m_f > 0: the cell's fluid mass; m_s: its solid mass).
+  double pull(const FlowSolver& flow, std::size_t c, double mf, double ms, double dt) const;
+  PartialCells partial_;
+  double cell_rate(const FlowSolver& flow, std::size_t c) const;  // lambda, before any cap
+  CellDrag drag_;
+  double drag_dt_ = 0;  // the step the drag was set for (0: none)
+  double inv_h2_ = 0;  // mean of 1 / h_d^2 over the three directions
   void solid_momentum(const DemSolver& dem);  // P_s per cell from the bodies' velocities now
   TetRasterizer raster_;
   // Lay-outs by body order key, kept while the body's rounded pose is unchanged.

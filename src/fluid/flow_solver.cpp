@@ -481,6 +481,16 @@ void FlowSolver::wall_model_stress(double dt) {
 PoissonStats FlowSolver::project(double dt, bool with_gravity) {
   const FluidGrid& g = *grid_;
   const Vec3 gravity = with_gravity ? settings_.gravity : Vec3{};
+  // A cell drag (in a step, not the initial projection): the cells' and faces' D = lambda dt enter
+  // as the density rho (1 + D) of the Poisson equation and the face correction.
+  const CellDrag* drag = with_gravity ? drag_ : nullptr;
+  const std::vector<double>* rho_p = &rho_;
+  if (drag) {
+    drag_density_.resize(rho_.size());
+    for (std::size_t c = 0; c < rho_.size(); ++c) drag_density_[c] = rho_[c] * (1 + drag->rate[c] * dt);
+    rho_p = &drag_density_;
+  }
+  const std::vector<double>& rho_e = *rho_p;
   // Predicted face velocities (F8).
   for (int d = 0; d < 3; ++d) {
     std::array<int, 3> hi{g.end(0), g.end(1), g.end(2)};
@@ -494,7 +504,18 @@ PoissonStats FlowSolver::project(double dt, bool with_gravity) {
       const int idx = d == 0 ? i : (d == 1 ? j : k);
       if (!g.periodic(d) && (idx == 0 || idx == n)) {
         const bool low = idx == 0;
-        uf[c] = g.boundary(d, low ? 0 : 1) == BoundaryKind::outflow ? u[low ? c : c - st] + dt * gravity[d] : 0.0;
+        const std::size_t in = low ? c : c - st;
+        const bool open = g.boundary(d, low ? 0 : 1) == BoundaryKind::outflow;
+        uf[c] = open ? u[in] + dt * gravity[d] : 0.0;
+        if (drag && open) {
+          const double D = drag->rate[in] * dt;
+          uf[c] = (uf[c] + D * drag->velocity[d][in]) / (1 + D);
+        }
+      } else if (drag) {  // (rho_f u*_f + mean of rho D U) / mean of rho (1 + D)
+        const double pull = 0.5 * (rho_[c - st] * drag->rate[c - st] * drag->velocity[d][c - st] +
+                                   rho_[c] * drag->rate[c] * drag->velocity[d][c]) * dt;
+        const double rho_f = 0.5 * (rho_[c - st] + rho_[c]);
+        uf[c] = (rho_f * (0.5 * (u[c - st] + u[c]) + dt * gravity[d]) + pull) / (0.5 * (rho_e[c - st] + rho_e[c]));
       } else {
         uf[c] = 0.5 * (u[c - st] + u[c]) + dt * gravity[d];
       }
@@ -510,7 +531,7 @@ PoissonStats FlowSolver::project(double dt, bool with_gravity) {
   PoissonStats ps;
   {
     auto t = timers_.scope("poisson");
-    poisson_->assemble(rho_);
+    poisson_->assemble(rho_e);
     ps = poisson_->solve(rhs_, p_);
   }
   auto t = timers_.scope("projection");
@@ -528,7 +549,7 @@ PoissonStats FlowSolver::project(double dt, bool with_gravity) {
     for_box({g.begin(0), g.begin(1), g.begin(2)}, hi, [&](int i, int j, int k) {
       const std::size_t c = g.at(i, j, k);
       const int idx = d == 0 ? i : (d == 1 ? j : k);
-      double grad_over_rho;
+      double grad, rho_f, rho_fe;  // the pressure's gradient; the face's density, and with the drag
       if (!g.periodic(d) && (idx == 0 || idx == n)) {
         const bool low = idx == 0;
         if (g.boundary(d, low ? 0 : 1) != BoundaryKind::outflow) {
@@ -536,19 +557,27 @@ PoissonStats FlowSolver::project(double dt, bool with_gravity) {
           return;
         }
         // p = 0 on the outflow face, half a cell from the centre.
-        grad_over_rho = low ? p_[c] / (0.5 * h) / rho_[c] : -p_[c - st] / (0.5 * h) / rho_[c - st];
+        const std::size_t in = low ? c : c - st;
+        grad = low ? p_[c] / (0.5 * h) : -p_[c - st] / (0.5 * h);
+        rho_f = rho_[in], rho_fe = rho_e[in];
       } else {
-        grad_over_rho = (p_[c] - p_[c - st]) / h / (0.5 * (rho_[c] + rho_[c - st]));
+        grad = (p_[c] - p_[c - st]) / h;
+        rho_f = 0.5 * (rho_[c] + rho_[c - st]), rho_fe = 0.5 * (rho_e[c] + rho_e[c - st]);
       }
-      a[c] = gravity[d] - grad_over_rho;
-      uf[c] -= dt * grad_over_rho;
+      a[c] = gravity[d] - grad / rho_f;
+      uf[c] -= dt * (grad / rho_fe);
     });
   }
   for (int d = 0; d < 3; ++d) {
     const std::ptrdiff_t st = g.stride(d);
     for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)}, [&](int i, int j, int k) {
       const std::size_t c = g.at(i, j, k);
-      u_[d][c] += dt * 0.5 * (face_accel_[d][c] + face_accel_[d][c + st]);
+      if (drag) {
+        const double D = drag->rate[c] * dt;
+        u_[d][c] = (u_[d][c] + D * drag->velocity[d][c] + dt * 0.5 * (face_accel_[d][c] + face_accel_[d][c + st])) / (1 + D);
+      } else {
+        u_[d][c] += dt * 0.5 * (face_accel_[d][c] + face_accel_[d][c + st]);
+      }
     });
   }
   g.exchange({&u_[0], &u_[1], &u_[2]});

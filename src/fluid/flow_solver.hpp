@@ -21,6 +21,13 @@
 // The face velocities satisfy discrete continuity to the Poisson tolerance and carry the next
 // step's VOF and momentum fluxes (the collocated MICS / approximate-projection scheme).
 //
+// A cell drag (the coupling's partly covered cells, theory C4c) enters step 3 implicitly: per cell a
+// rate lambda and a velocity U it pulls towards, D = lambda dt,
+//   u_c = (u*_c + D_c U_c + dt a_c) / (1 + D_c),  u_f = (u*_f + D_f U_f + dt a_f) / (1 + D_f),
+// the Poisson equation taking the face coefficients 1 / (rho_f (1 + D_f)) (rho (1 + D) in each cell,
+// its faces the mean of the two). The face accelerations a_f stay the pressure's and gravity's.
+// At a steady state lambda (u - U) = a + the viscous stage's: the same on any step.
+//
 // Surface tension is not in the seeds' scenes: its place is a face force added to a_f before the
 // projection (step 3), where the gravity term enters.
 #pragma once
@@ -37,6 +44,13 @@
 #include "fluid/pressure_poisson.hpp"
 
 namespace tessera {
+
+// The flow's input from a solid phase (theory C4c): ghosted cell fields, the drag rate lambda (1/s;
+// 0: none) and the velocity it pulls towards.
+struct CellDrag {
+  std::vector<double> rate;
+  std::array<std::vector<double>, 3> velocity;
+};
 
 struct FluidPhase {
   double density = 1000;    // kg/m^3
@@ -119,12 +133,13 @@ class FlowSolver {
   double max_fraction() const;
 
   // Fields (ghosted local arrays, see FluidGrid): volume fraction, cell velocity components,
-  // pressure, face-normal velocities, density.
+  // pressure, face-normal velocities, density, viscosity.
   const std::vector<double>& fraction() const { return f_; }
   const std::vector<double>& velocity(int d) const { return u_[d]; }
   const std::vector<double>& pressure() const { return p_; }
   const std::vector<double>& face_velocity(int d) const { return uf_[d]; }
   const std::vector<double>& density() const { return rho_; }
+  const std::vector<double>& viscosity() const { return mu_; }  // dynamic, Pa s
   // The last projection's face accelerations a_f = g_f - grad_f p / rho_f along d (F10), on the
   // low face of each cell (the coupling's pressure force on bodies reads them).
   const std::vector<double>& face_acceleration(int d) const { return face_accel_[d]; }
@@ -146,6 +161,8 @@ class FlowSolver {
   // On: the viscous stage keeps div(tau) per owned cell (N/m^3; the coupling's viscous force on
   // bodies reads it). Off (the default): not stored.
   void keep_stress_divergence(bool on);
+  // A cell drag held by the caller and applied in each step's projection (nullptr: none).
+  void set_cell_drag(const CellDrag* drag) { drag_ = drag; }
   const std::vector<double>& stress_divergence(int q) const { return stress_div_[q]; }
 
   // Phase timers, with `halo_exchange_fields` and `halo_exchange_multigrid`: the ghost exchanges'
@@ -179,6 +196,8 @@ class FlowSolver {
   std::array<std::vector<double>, 3> stress_div_;  // div(tau) of the last viscous stage, when kept
   std::array<std::vector<double>, 4> plic_;  // nx, ny, nz, alpha of interface cells
   std::vector<double> flux_f_, flux_m_, rhs_;
+  const CellDrag* drag_ = nullptr;
+  std::vector<double> drag_density_;  // rho (1 + lambda dt): the projection's, with a cell drag
   std::array<std::vector<double>, 3> flux_q_;
   PhaseTimers timers_;
   double time_ = 0;
