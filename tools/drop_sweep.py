@@ -26,7 +26,7 @@ Usage: drop_sweep.py run   [--set-of series|study] [--case cases/drop_on_sand/sm
 import argparse, fcntl, glob, json, math, os, shlex, subprocess, sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-TESSERA = os.path.join(ROOT, 'build', 'bin', 'tessera')
+TESSERA = os.environ.get('TESSERA', os.path.join(ROOT, 'build', 'bin', 'tessera'))
 
 
 def stiffness(k):
