@@ -14,10 +14,11 @@
 //               limited upwind velocity: density and momentum move together, so a uniform velocity
 //               is kept exactly at any density ratio (F3-F8).
 //   2. viscous  explicit variable-viscosity stress (full grad u + grad u^T) on the advected velocity.
-//   3. project  face velocities u*_f = mean of the two cells + dt g_f; Poisson for p (F9,
-//               pressure_poisson.hpp); u_f = u*_f + dt a_f with a_f = g_f - grad_f p / rho_f;
-//               cell velocities gain the mean of their two face accelerations per direction.
-//               Hydrostatic rest is exact: a_f = 0 on every face at rest (F10).
+//   3. project  face velocities u*_f = mean of the two cells + dt b_f, b_f gravity's part in the
+//               balanced form -phi_I grad rho / rho (F10b: p~ = p - rho g . x); Poisson for p~
+//               (F9, pressure_poisson.hpp); u_f = u*_f - dt grad_f p~ / rho_f, a_f = b_f -
+//               grad_f p~ / rho_f; cell velocities gain the mean of their two face accelerations
+//               per direction. Rest is exact: a_f = 0 on every face for any interface normal to g.
 // The face velocities satisfy discrete continuity to the Poisson tolerance and carry the next
 // step's VOF and momentum fluxes (the collocated MICS / approximate-projection scheme).
 //
@@ -136,7 +137,10 @@ class FlowSolver {
   // pressure, face-normal velocities, density, viscosity.
   const std::vector<double>& fraction() const { return f_; }
   const std::vector<double>& velocity(int d) const { return u_[d]; }
+  // The projection's pressure p~ = p - rho g . (x - lo) (F10b; what checkpoints keep), and the
+  // pressure p itself, per cell (the fields' output).
   const std::vector<double>& pressure() const { return p_; }
+  std::vector<double> static_pressure() const;
   const std::vector<double>& face_velocity(int d) const { return uf_[d]; }
   const std::vector<double>& density() const { return rho_; }
   const std::vector<double>& viscosity() const { return mu_; }  // dynamic, Pa s
@@ -183,6 +187,9 @@ class FlowSolver {
   void fill_pressure_ghosts();
   void sweep(int d, double dt, bool last);  // one direction of VOF + momentum advection
   void reconstruct(int d);                  // PLIC in owned cells and one layer beyond along d
+  void youngs_normal(std::size_t c, double n[3]) const;
+  void interface_potential();               // interface_phi_ (F10b)
+  double potential(double a, double b, double c) const;  // g . (x - lo), x in cell widths from lo
   void viscous(double dt);                  // u <- u + dt div(tau) / rho
   void wall_model_stress(double dt);        // the wall law on no-slip walls (after viscous)
   PoissonStats project(double dt, bool with_gravity);
@@ -197,7 +204,10 @@ class FlowSolver {
   std::array<std::vector<double>, 4> plic_;  // nx, ny, nz, alpha of interface cells
   std::vector<double> flux_f_, flux_m_, rhs_;
   const CellDrag* drag_ = nullptr;
-  std::vector<double> drag_density_;  // rho (1 + lambda dt): the projection's, with a cell drag
+  std::vector<double> drag_density_;
+  std::vector<double> interface_phi_;  // g . (x - lo) on each interface cell's plane; NaN elsewhere
+  double g2_ = 0, h_max_ = 0;
+  int down_axis_ = 2;  // gravity's main direction  // rho (1 + lambda dt): the projection's, with a cell drag
   std::array<std::vector<double>, 3> flux_q_;
   PhaseTimers timers_;
   double time_ = 0;
