@@ -574,8 +574,9 @@ PoissonStats FlowSolver::project(double dt, bool with_gravity) {
     rho_p = &drag_density_;
   }
   const std::vector<double>& rho_e = *rho_p;
-  // Gravity in the balanced form of F10b: -grad p + rho g = -grad p~ - phi grad rho, p~ = p - rho phi,
-  // phi = g . (x - lo); across a face where the density jumps, phi is the interface's.
+  // Gravity balanced at the interface (F10b): b_f = g_d where the density does not jump; across a
+  // jump, (rho_b (phi_b - phi_I) - rho_a (phi_a - phi_I)) / (h rho_f), phi = g . (x - lo) at the two
+  // cells' centres and phi_I at the interface.
   const bool gravity_on = gravity.x != 0 || gravity.y != 0 || gravity.z != 0;
   if (gravity_on) interface_potential();
   // Predicted face velocities (F8), and in face_accel_ the gravity's part b_f of the acceleration.
@@ -591,15 +592,11 @@ PoissonStats FlowSolver::project(double dt, bool with_gravity) {
     for_box({g.begin(0), g.begin(1), g.begin(2)}, hi, [&](int i, int j, int k) {
       const std::size_t c = g.at(i, j, k);
       const int idx = d == 0 ? i : (d == 1 ? j : k);
-      auto face_phi = [&] {  // phi at the face's centre
-        return potential(i + (d == 0 ? 0.0 : 0.5), j + (d == 1 ? 0.0 : 0.5), k + (d == 2 ? 0.0 : 0.5));
-      };
       if (!g.periodic(d) && (idx == 0 || idx == n)) {
         const bool low = idx == 0;
         const std::size_t in = low ? c : c - st;
         const bool open = g.boundary(d, low ? 0 : 1) == BoundaryKind::outflow;
-        // An outflow face: p = 0 there, so p~ = -rho phi_b, which goes into b_f; p~ = 0 on the face.
-        b[c] = open && gravity_on ? (low ? -1.0 : 1.0) * face_phi() / (0.5 * h) : 0.0;
+        b[c] = open ? gravity[d] : 0.0;
         uf[c] = open ? u[in] + dt * b[c] : 0.0;
         if (drag && open) {
           const double D = drag->rate[in] * dt;
@@ -607,17 +604,19 @@ PoissonStats FlowSolver::project(double dt, bool with_gravity) {
         }
         return;
       }
-      const double jump = rho_[c] - rho_[c - st];
       const double rho_f = 0.5 * (rho_[c - st] + rho_[c]);
-      b[c] = 0.0;
-      if (gravity_on && jump != 0) {
+      b[c] = gravity[d];
+      if (gravity_on && rho_[c] != rho_[c - st]) {
         // The two cells' interface potentials weighted by f (1 - f): a cell holding a round-off
-        // residue of liquid has its plane at a corner and must not count.
+        // residue of liquid has its plane at a corner and must not count. Neither: the face's.
         const double p0 = interface_phi_[c - st], p1 = interface_phi_[c];
         const double w0 = std::isnan(p0) ? 0.0 : f_[c - st] * (1 - f_[c - st]);
         const double w1 = std::isnan(p1) ? 0.0 : f_[c] * (1 - f_[c]);
-        const double phi = w0 + w1 > 0 ? (w0 * (w0 > 0 ? p0 : 0.0) + w1 * (w1 > 0 ? p1 : 0.0)) / (w0 + w1) : face_phi();
-        b[c] = -phi * jump / (h * rho_f);
+        const double phi_i = w0 + w1 > 0 ? (w0 * (w0 > 0 ? p0 : 0.0) + w1 * (w1 > 0 ? p1 : 0.0)) / (w0 + w1)
+                                         : potential(i + (d == 0 ? 0.0 : 0.5), j + (d == 1 ? 0.0 : 0.5), k + (d == 2 ? 0.0 : 0.5));
+        const int ia = i - (d == 0), ja = j - (d == 1), ka = k - (d == 2);  // the cell below the face
+        const double phi_a = potential(ia + 0.5, ja + 0.5, ka + 0.5), phi_b = potential(i + 0.5, j + 0.5, k + 0.5);
+        b[c] = (rho_[c] * (phi_b - phi_i) - rho_[c - st] * (phi_a - phi_i)) / (h * rho_f);
       }
       if (drag) {  // (rho_f u*_f + mean of rho D U) / mean of rho (1 + D)
         const double pull = 0.5 * (rho_[c - st] * drag->rate[c - st] * drag->velocity[d][c - st] +
@@ -671,7 +670,7 @@ PoissonStats FlowSolver::project(double dt, bool with_gravity) {
         grad = (p_[c] - p_[c - st]) / h;
         rho_f = 0.5 * (rho_[c] + rho_[c - st]), rho_fe = 0.5 * (rho_e[c] + rho_e[c - st]);
       }
-      a[c] -= grad / rho_f;  // a_f = b_f - grad p~ / rho_f
+      a[c] -= grad / rho_f;  // a_f = b_f - grad p / rho_f
       uf[c] -= dt * (grad / rho_fe);
     });
   }
@@ -690,16 +689,6 @@ PoissonStats FlowSolver::project(double dt, bool with_gravity) {
   g.exchange({&u_[0], &u_[1], &u_[2]});
   fill_velocity_ghosts(u_);
   return ps;
-}
-
-std::vector<double> FlowSolver::static_pressure() const {
-  const FluidGrid& g = *grid_;
-  std::vector<double> p = p_;
-  for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)}, [&](int i, int j, int k) {
-    const std::size_t c = g.at(i, j, k);
-    p[c] += rho_[c] * potential(i + 0.5, j + 0.5, k + 0.5);
-  });
-  return p;
 }
 
 Vec3 FlowSolver::pressure_force(int i, int j, int k) const {

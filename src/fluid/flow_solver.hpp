@@ -14,11 +14,11 @@
 //               limited upwind velocity: density and momentum move together, so a uniform velocity
 //               is kept exactly at any density ratio (F3-F8).
 //   2. viscous  explicit variable-viscosity stress (full grad u + grad u^T) on the advected velocity.
-//   3. project  face velocities u*_f = mean of the two cells + dt b_f, b_f gravity's part in the
-//               balanced form -phi_I grad rho / rho (F10b: p~ = p - rho g . x); Poisson for p~
-//               (F9, pressure_poisson.hpp); u_f = u*_f - dt grad_f p~ / rho_f, a_f = b_f -
-//               grad_f p~ / rho_f; cell velocities gain the mean of their two face accelerations
-//               per direction. Rest is exact: a_f = 0 on every face for any interface normal to g.
+//   3. project  face velocities u*_f = mean of the two cells + dt b_f, b_f = g_f, or across a
+//               density jump gravity balanced at the interface (F10b); Poisson for p (F9,
+//               pressure_poisson.hpp); u_f = u*_f + dt a_f with a_f = b_f - grad_f p / rho_f;
+//               cell velocities gain the mean of their two face accelerations per direction.
+//               Rest is exact: a_f = 0 on every face for any interface normal to g (F10, F10b).
 // The face velocities satisfy discrete continuity to the Poisson tolerance and carry the next
 // step's VOF and momentum fluxes (the collocated MICS / approximate-projection scheme).
 //
@@ -137,10 +137,7 @@ class FlowSolver {
   // pressure, face-normal velocities, density, viscosity.
   const std::vector<double>& fraction() const { return f_; }
   const std::vector<double>& velocity(int d) const { return u_[d]; }
-  // The projection's pressure p~ = p - rho g . (x - lo) (F10b; what checkpoints keep), and the
-  // pressure p itself, per cell (the fields' output).
   const std::vector<double>& pressure() const { return p_; }
-  std::vector<double> static_pressure() const;
   const std::vector<double>& face_velocity(int d) const { return uf_[d]; }
   const std::vector<double>& density() const { return rho_; }
   const std::vector<double>& viscosity() const { return mu_; }  // dynamic, Pa s

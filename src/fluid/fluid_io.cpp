@@ -78,8 +78,7 @@ void FieldSeries::write(const FlowSolver& flow) {
     f.write_block("liquid_fraction", pack(g, b, {&flow.fraction()}).data(), b.global, b.offset, b.count, 1);
     f.write_block("velocity", pack(g, b, {&flow.velocity(0), &flow.velocity(1), &flow.velocity(2)}).data(), b.global,
                   b.offset, b.count, 3);
-    const std::vector<double> pressure = flow.static_pressure();
-    f.write_block("pressure", pack(g, b, {&pressure}).data(), b.global, b.offset, b.count, 1);
+    f.write_block("pressure", pack(g, b, {&flow.pressure()}).data(), b.global, b.offset, b.count, 1);
     for (const auto& [nm, field] : extra_) f.write_block(nm, pack(g, b, {field}).data(), b.global, b.offset, b.count, 1);
   }
   times_.push_back(flow.time());

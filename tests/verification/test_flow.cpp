@@ -269,8 +269,8 @@ TEST(Hydrostatic, WaterUnderAirStaysAtRest) {
 }
 
 // Water under air (1000 : 1) at rest with the gravity turned 30 degrees from the grid's z axis in
-// the x-z plane, the interface normal to it: no cell face lies in the interface, the liquid fraction
-// is a sampled plane. The projection must hold the fluids at rest (theory F10b: with gravity as
+// the x-z plane, the interface normal to it: no cell face lies in the interface, each cell holds
+// the plane's exact fraction. The projection must hold the fluids at rest (theory F10b: with gravity as
 // rho g on the faces, 3.1e-2 m/s appear within 200 steps, 4 times the speed a free fall reaches in
 // one step). Bound: 1e-3 of that speed, |g| dt.
 TEST(Hydrostatic, TiltedInterfaceStaysAtRest) {
