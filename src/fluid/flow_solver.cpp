@@ -614,7 +614,7 @@ PoissonStats FlowSolver::project(double dt, bool with_gravity) {
         const double w1 = std::isnan(p1) ? 0.0 : f_[c] * (1 - f_[c]);
         const double phi_i = w0 + w1 > 0 ? (w0 * (w0 > 0 ? p0 : 0.0) + w1 * (w1 > 0 ? p1 : 0.0)) / (w0 + w1)
                                          : potential(i + (d == 0 ? 0.0 : 0.5), j + (d == 1 ? 0.0 : 0.5), k + (d == 2 ? 0.0 : 0.5));
-        const int ia = i - (d == 0), ja = j - (d == 1), ka = k - (d == 2);  // the cell below the face
+        const int ia = i - (d == 0), ja = j - (d == 1), ka = k - (d == 2);  // the cell on the face's low side
         const double phi_a = potential(ia + 0.5, ja + 0.5, ka + 0.5), phi_b = potential(i + 0.5, j + 0.5, k + 0.5);
         b[c] = (rho_[c] * (phi_b - phi_i) - rho_[c - st] * (phi_a - phi_i)) / (h * rho_f);
       }
