@@ -16,7 +16,7 @@ CouplingSettings CouplingSettings::from_config(const ConfigNode& c) {
   s.liquid_in_pores = c.flag("liquid_in_pores", true);
   s.fixed_bodies = c.choice("bodies", {"moving", "fixed"}, "moving") == "fixed";
   s.layout_tolerance = c.real("layout_tolerance", Dim::none, Range::closed(0, 0.25), s.layout_tolerance);
-  s.partial.per_step = c.choice("partial_cells", {"rate", "step"}, "rate") == "step";
+  s.partial.per_step = c.choice("partial_cells", {"step", "rate"}, "step") == "step";
   s.partial.rate = c.real("partial_cell_rate", Dim::none, Range::positive(), s.partial.rate);
   return s;
 }

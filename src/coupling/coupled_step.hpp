@@ -39,9 +39,9 @@ struct CouplingSettings {
   // passes through): no DEM sub-steps and no exchange C4a; the fluid's force on each body (C3) is
   // still computed and reported, not applied. `moving` (the default): the coupled step as above.
   bool fixed_bodies = false;
-  // A partly covered cell: `partial_cells: rate` (relaxes towards the solid's velocity at the rate
-  // `partial_cell_rate` nu alpha / ((1 - alpha) h^2), whatever the step) or `step` (the seed's
-  // mass average every step). Theory C4c.
+  // A partly covered cell: `partial_cells: step` (the default: the seed's mass average every step)
+  // or `rate` (dragged towards the solid's velocity at the rate `partial_cell_rate` nu alpha /
+  // ((1 - alpha) h^2), implicit in the projection: the same on any step). Theory C4c.
   PartialCells partial;
   static CouplingSettings from_config(const ConfigNode& coupling);
 };

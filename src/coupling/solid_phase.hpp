@@ -42,13 +42,13 @@ namespace tessera {
 
 // How the correction treats a cell the bodies cover in part (theory C4c).
 struct PartialCells {
-  // `step` (the seed's MICS): every flow step the cell takes the mass average of its fluid and its
-  // solid, u <- (m_f u + P_s) / (m_f + m_s): the flow a partly covered cell lets through then scales
-  // with the step and with the solid's density. `rate` (the default): the cell is pulled towards the
+  // `step` (the seed's MICS, the default): every flow step the cell takes the mass average of its
+  // fluid and its solid, u <- (m_f u + P_s) / (m_f + m_s): the flow a partly covered cell lets through
+  // then scales with the step and with the solid's density. `rate`: the cell is pulled towards the
   // solid's velocity U = P_s / m_s at the rate lambda = kappa nu alpha_s / ((1 - alpha_s) h^2), a
   // drag implicit in the flow's projection (FlowSolver's CellDrag) up to lambda dt = kMaxDrag, the
   // rest of it by the correction: u <- (u + lambda dt U) / (1 + lambda dt) in all.
-  bool per_step = false;
+  bool per_step = true;
   // kappa: chosen on the cubic sphere array of docs/validation.md (c = 0.216, 12 and 16 cells per
   // spacing); theory C4c.
   double rate = 25;
