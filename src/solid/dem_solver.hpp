@@ -190,6 +190,7 @@ class DemSolver {
   void compute_pair_forces(double dt, bool update_history);
   void compute_wall_forces(double dt);
   void store_forces();
+  void fill_coefficients();  // the law's coefficients of every pair and wall contact in the lists
   template <class Law>
   void fill_pair_coefficients();
   void integrate_first();

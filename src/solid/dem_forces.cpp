@@ -1,0 +1,297 @@
+// SPDX-License-Identifier: MIT
+// The DEM's force stage (DemSolver::compute_forces): the contact law's coefficients per pair and
+// per wall, then the pair, plane-wall, mesh-wall and free-sphere forces, accumulated through the lane
+// kernel (contact_kernel.hpp) into k_force_; shaped bodies' element forces with their levers.
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+#include "core/errors.hpp"
+#include "solid/contact_kernel.hpp"
+#include "solid/dem_solver.hpp"
+#include "solid/triangle_contact.hpp"
+
+namespace tessera {
+
+void DemSolver::add_lever(KernelForce& f, const KernelGeometry& g, std::size_t body, double fx, double fy,
+                          double fz) const {
+  // Torque of an element force about its body's centre: (x_e - x) x F, the arm as the contact saw it.
+  const double ax = g.x - p_.x[3 * body], ay = g.y - p_.x[3 * body + 1], az = g.z - p_.x[3 * body + 2];
+  f.tx += ay * fz - az * fy, f.ty += az * fx - ax * fz, f.tz += ax * fy - ay * fx;
+}
+
+void DemSolver::store_forces() {
+  for (std::size_t i = 0; i < p_.owned; ++i) {
+    const KernelForce& fo = k_force_[i];
+    p_.f[3 * i] = fo.fx, p_.f[3 * i + 1] = fo.fy, p_.f[3 * i + 2] = fo.fz;
+    p_.torque[3 * i] = fo.tx, p_.torque[3 * i + 1] = fo.ty, p_.torque[3 * i + 2] = fo.tz;
+  }
+}
+
+void DemSolver::fill_coefficients() {
+  with_law(model_.law(), [&](auto law) { fill_pair_coefficients<decltype(law)>(); });
+}
+
+template <class Law>
+void DemSolver::fill_pair_coefficients() {
+  struct Key {
+    std::int32_t ma, mb;
+    double meff, reff;
+    bool operator==(const Key& o) const { return ma == o.ma && mb == o.mb && meff == o.meff && reff == o.reff; }
+  };
+  struct KeyHash {
+    std::size_t operator()(const Key& k) const {
+      std::uint64_t h = std::bit_cast<std::uint64_t>(k.meff) * 0x9E3779B97F4A7C15ULL;
+      h ^= std::bit_cast<std::uint64_t>(k.reff) + 0x94D049BB133111EBULL + (h << 6) + (h >> 2);
+      return h ^ (static_cast<std::uint64_t>(k.ma) << 32 | static_cast<std::uint32_t>(k.mb));
+    }
+  };
+  std::unordered_map<Key, std::int32_t, KeyHash> index;
+  coefficient_sets_.clear();
+  Key last{-1, -1, 0, 0};
+  std::int32_t last_index = -1;
+  auto lookup = [&](const Key& key) {
+    if (key == last) return last_index;  // neighbours in a list are often alike: skip the hash
+    const auto [it, added] = index.emplace(key, static_cast<std::int32_t>(coefficient_sets_.size()));
+    if (added)
+      coefficient_sets_.push_back(
+          ContactCoefficients::of<Law>(Law::coefficients(model_.pair(key.ma, key.mb), key.meff, key.reff)));
+    last = key, last_index = it->second;
+    return it->second;
+  };
+  // Entries hold elements: their radius, and their body's material and mass.
+  const bool sh = shaped();
+  auto radius = [&](std::size_t e) { return sh ? e_r_[e] : p_.radius[e]; };
+  auto body = [&](std::size_t e) { return sh ? static_cast<std::size_t>(e_body_[e]) : e; };
+  pair_coefficient_.resize(list_.size());
+  // Grains of many sizes make nearly every pair's (m*, R*) distinct: once the first 256 pairs show
+  // that (more than half of them new sets), the rest get their own sets without the hash map.
+  constexpr std::size_t probe = 256;
+  bool shared = true;
+  for (std::size_t k = 0; k < list_.size(); ++k) {
+    const std::size_t a = list_.first[k], b = list_.second[k];
+    const double ra = radius(a), rb = radius(b);
+    const Key key{p_.material[body(a)], p_.material[body(b)], list_.meff[k], ra * rb / (ra + rb)};
+    if (shared) {
+      pair_coefficient_[k] = lookup(key);
+      if (k + 1 == probe && 2 * coefficient_sets_.size() > probe) shared = false;
+    } else {
+      pair_coefficient_[k] = static_cast<std::int32_t>(coefficient_sets_.size());
+      coefficient_sets_.push_back(
+          ContactCoefficients::of<Law>(Law::coefficients(model_.pair(key.ma, key.mb), key.meff, key.reff)));
+    }
+  }
+  // Walls: m* = m, R* = R (T7).
+  const auto& prims = walls_.primitives();
+  wall_coefficient_.resize(wall_body_.size());
+  for (std::size_t k = 0; k < wall_body_.size(); ++k) {
+    const std::size_t e = wall_body_[k];
+    wall_coefficient_[k] = lookup({p_.material[body(e)], prims[wall_slot_[k]].material, p_.mass[body(e)], radius(e)});
+  }
+  const auto& meshes = walls_.meshes();
+  mesh_coefficient_.resize(mesh_entity_.size());
+  for (std::size_t k = 0; k < mesh_entity_.size(); ++k) {
+    const std::size_t e = mesh_entity_[k];
+    mesh_coefficient_[k] = lookup({p_.material[body(e)], meshes[mesh_of_[k]].material, p_.mass[body(e)], radius(e)});
+  }
+  // Free spheres: with grains as a body pair (m*, R* of the two), with walls and meshes as a wall.
+  free_coefficient_.resize(free_entity_.size());
+  for (std::size_t k = 0; k < free_entity_.size(); ++k) {
+    const std::size_t e = free_entity_[k];
+    const FreeSphere& s = free_[free_of_[k]];
+    const double m = p_.mass[body(e)], r = radius(e);
+    free_coefficient_[k] =
+        lookup({p_.material[body(e)], s.material, m * s.mass / (m + s.mass), r * s.radius / (r + s.radius)});
+  }
+  free_wall_coefficient_.clear();
+  for (const auto& s : free_) {
+    for (const auto& w : prims) free_wall_coefficient_.push_back(lookup({s.material, w.material, s.mass, s.radius}));
+    for (const auto& m : meshes) free_wall_coefficient_.push_back(lookup({s.material, m.material, s.mass, s.radius}));
+  }
+}
+
+void DemSolver::compute_forces(bool update_history) {
+  // dt = 0 leaves the springs unchanged (the initial forces at set-up).
+  const double dt = update_history ? dt_ : 0.0;
+  {
+    auto t = timers_.scope("contact_forces");
+    compute_pair_forces(dt, update_history);
+  }
+  {
+    auto t = timers_.scope("wall_forces");
+    compute_wall_forces(dt);
+    const auto& meshes = walls_.meshes();
+    if (meshes.empty() && free_.empty()) return;
+    mesh_hist_next_.clear();
+    mesh_loads_.clear();
+    if (!meshes.empty()) compute_mesh_forces(dt);
+    if (!free_.empty()) compute_free_sphere_forces(dt);
+    if (dt > 0) mesh_hist_.swap(mesh_hist_next_);
+    // A pivot and a free sphere need the whole load every step; other meshes only when reported.
+    mesh_loads_pending_ = true;
+    bool now = !free_.empty();
+    for (const auto& m : meshes) now = now || m.motion == MeshWall::Motion::pivot;
+    if (now) sum_mesh_loads();
+    compute_free_sphere_wall_forces(dt);
+  }
+}
+
+void DemSolver::compute_pair_forces(double dt, bool update_history) {
+  const std::size_t n = shaped() ? e_body_.size() : p_.size();
+  const std::size_t np = list_.size();
+  const std::int32_t* first = list_.first.data();
+  const std::int32_t* second = list_.second.data();
+  double* hist = list_.history.data();
+  k_geometry_.resize(n);
+  k_motion_.resize(n);
+  // Forces go straight to bodies (shaped mode: element forces with their lever arms, in pair order,
+  // which is canonical as for spheres), so the buffer is one slot per body.
+  const bool sh = shaped();
+  k_force_.assign(p_.size(), KernelForce{0, 0, 0, 0, 0, 0});
+  // Owned bodies were packed by integrate_first unless a rebuild moved them; ghosts always here.
+  // (Shaped mode: every element was packed by update_elements.)
+  for (std::size_t i = shaped() ? n : (owned_mirrors_current_ ? p_.owned : 0); i < n; ++i) {
+    const double* x = &p_.x[3 * i];
+    const double* v = &p_.v[3 * i];
+    const double* w = &p_.omega[3 * i];
+    k_geometry_[i] = {x[0], x[1], x[2], p_.radius[i]};
+    k_motion_[i] = {v[0], v[1], v[2], w[0], w[1], w[2]};
+  }
+  const KernelGeometry* g = k_geometry_.data();
+  const KernelMotion* m = k_motion_.data();
+  KernelForce* out = k_force_.data();
+  // Pass 1, branch-free: which listed pairs touch (about half of them in a dense bed, at random,
+  // which a branch would mispredict). The compacted list keeps the canonical order.
+  touching_.resize(np);
+  std::size_t nt = 0;
+  // Prefetch distances: partners are scattered over ~1000 bodies, and a large bed's mirrors come
+  // from memory. Pass 1 spends a few ns a pair, so it looks further ahead than pass 2.
+  constexpr std::size_t ahead = 16, ahead1 = 64;
+  for (std::size_t k = 0; k < np; ++k) {
+    if (k + ahead1 < np) __builtin_prefetch(&g[second[k + ahead1]]);
+    const KernelGeometry& a = g[first[k]];
+    const KernelGeometry& b = g[second[k]];
+    const double dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z, rsum = a.r + b.r;
+    touching_[nt] = static_cast<std::int32_t>(k);
+    nt += (dx * dx + dy * dy + dz * dz < rsum * rsum) ? 1 : 0;
+  }
+  touching_.resize(nt);
+  if (shaped())
+    for (const auto k : touching_) element_motion(first[k]), element_motion(second[k]);
+  // Contacts that opened since the last evaluation lose their history (T3).
+  if (update_history) {
+    auto it = touching_.begin();
+    for (const auto k : touching_before_) {
+      while (it != touching_.end() && *it < k) ++it;
+      if (it == touching_.end() || *it != k) hist[3 * k] = hist[3 * k + 1] = hist[3 * k + 2] = 0.0;
+    }
+  }
+  // Pass 2, in blocks: gather the pairs' data into lanes, evaluate the law on all lanes
+  // (vectorised, contact_kernel.cpp), then accumulate forces in canonical order.
+  constexpr std::size_t B = ContactLanes::width;
+  ContactLanes& L = lanes_;
+  const ContactCoefficients* sets = coefficient_sets_.data();
+  const std::int32_t* pc = pair_coefficient_.data();
+  for (std::size_t s = 0; s < nt; s += B) {
+    const std::size_t nb = std::min(B, nt - s);
+    for (std::size_t j = 0; j < nb; ++j) {
+      if (s + j + ahead < nt) {
+        // The partner's lines (pass 1 read its geometry long ago: a large bed's mirrors leave the
+        // cache in between), the pair's history and its coefficient set.
+        const std::size_t kk = static_cast<std::size_t>(touching_[s + j + ahead]);
+        __builtin_prefetch(&g[second[kk]]);
+        __builtin_prefetch(&m[second[kk]]);
+        __builtin_prefetch(&out[second[kk]], 1);
+        __builtin_prefetch(&hist[3 * kk], 1);
+        __builtin_prefetch(&sets[pc[kk]]);
+      }
+      const std::size_t k = static_cast<std::size_t>(touching_[s + j]);
+      const std::size_t a = first[k], b = second[k];
+      const KernelGeometry &ga = g[a], &gb = g[b];
+      const KernelMotion &ma = m[a], &mb = m[b];
+      L.dx[j] = ga.x - gb.x, L.dy[j] = ga.y - gb.y, L.dz[j] = ga.z - gb.z;
+      L.ra[j] = ga.r, L.rb[j] = gb.r;
+      L.vx[j] = ma.vx - mb.vx, L.vy[j] = ma.vy - mb.vy, L.vz[j] = ma.vz - mb.vz;
+      L.wx[j] = ma.wx * ga.r + mb.wx * gb.r;
+      L.wy[j] = ma.wy * ga.r + mb.wy * gb.r;
+      L.wz[j] = ma.wz * ga.r + mb.wz * gb.r;
+      L.hx[j] = hist[3 * k], L.hy[j] = hist[3 * k + 1], L.hz[j] = hist[3 * k + 2];
+      const ContactCoefficients& cs = sets[pc[k]];
+      L.set_coefficients(j, cs);
+    }
+    evaluate_contacts(model_.law(), L, nb, dt);
+    for (std::size_t j = 0; j < nb; ++j) {
+      const std::size_t k = static_cast<std::size_t>(touching_[s + j]);
+      hist[3 * k] = L.hx[j], hist[3 * k + 1] = L.hy[j], hist[3 * k + 2] = L.hz[j];
+      const std::size_t a = sh ? static_cast<std::size_t>(e_body_[first[k]]) : first[k];
+      const std::size_t b = sh ? static_cast<std::size_t>(e_body_[second[k]]) : second[k];
+      KernelForce &fa = out[a], &fb = out[b];
+      fa.fx += L.fx[j], fa.fy += L.fy[j], fa.fz += L.fz[j];
+      fb.fx -= L.fx[j], fb.fy -= L.fy[j], fb.fz -= L.fz[j];
+      fa.tx -= L.nx[j] * L.ra[j], fa.ty -= L.ny[j] * L.ra[j], fa.tz -= L.nz[j] * L.ra[j];
+      fb.tx -= L.nx[j] * L.rb[j], fb.ty -= L.ny[j] * L.rb[j], fb.tz -= L.nz[j] * L.rb[j];
+      if (sh) {
+        add_lever(fa, g[first[k]], a, L.fx[j], L.fy[j], L.fz[j]);
+        add_lever(fb, g[second[k]], b, -L.fx[j], -L.fy[j], -L.fz[j]);
+      }
+    }
+  }
+  if (update_history) touching_before_.swap(touching_);
+}
+
+void DemSolver::compute_wall_forces(double dt) {
+  // Entities are elements (bodies for spheres), read from the kernel mirrors packed this step.
+  const KernelGeometry* g = k_geometry_.data();
+  const KernelMotion* m = k_motion_.data();
+  const bool sh = shaped();
+  // Walls: bodies near a wall at the last rebuild, in (body, wall) order; same lanes and law.
+  const auto& prims = walls_.primitives();
+  const std::size_t slots = static_cast<std::size_t>(walls_.slots());
+  wall_entry_force_.resize(3 * wall_body_.size());  // every entry is written below
+  ContactLanes& L = lanes_;
+  std::int32_t lane_entry[ContactLanes::width];
+  const ContactCoefficients* sets = coefficient_sets_.data();
+  std::size_t nb = 0;
+  auto flush = [&] {
+    evaluate_wall_contacts(model_.law(), L, nb, dt);
+    for (std::size_t j = 0; j < nb; ++j) {
+      const std::size_t k = static_cast<std::size_t>(lane_entry[j]);
+      const std::size_t i = wall_body_[k];
+      double* h = sh ? &wall_hist_[3 * k] : &p_.wall_history[3 * (i * slots + wall_slot_[k])];
+      h[0] = L.hx[j], h[1] = L.hy[j], h[2] = L.hz[j];
+      add_wall_reaction(i, L, j);
+      double* load = &wall_entry_force_[3 * k];
+      load[0] = -L.fx[j], load[1] = -L.fy[j], load[2] = -L.fz[j];
+    }
+    nb = 0;
+  };
+  for (std::size_t k = 0; k < wall_body_.size(); ++k) {
+    const std::size_t i = wall_body_[k];
+    const std::size_t s = wall_slot_[k];
+    double* h = sh ? &wall_hist_[3 * k] : &p_.wall_history[3 * (i * slots + s)];
+    Vec3 nrm;
+    const KernelGeometry& gi = g[i];
+    const double ri = gi.r;
+    const double delta = prims[s].overlap(Vec3{gi.x, gi.y, gi.z}, ri, nrm);
+    if (delta <= 0.0) {
+      h[0] = h[1] = h[2] = 0.0;
+      double* load = &wall_entry_force_[3 * k];
+      load[0] = load[1] = load[2] = 0.0;
+      continue;
+    }
+    if (sh) element_motion(i);
+    const KernelMotion& mi = m[i];
+    L.dx[nb] = nrm.x, L.dy[nb] = nrm.y, L.dz[nb] = nrm.z;
+    L.ra[nb] = ri, L.rb[nb] = delta;
+    L.vx[nb] = mi.vx, L.vy[nb] = mi.vy, L.vz[nb] = mi.vz;
+    L.wx[nb] = mi.wx * ri, L.wy[nb] = mi.wy * ri, L.wz[nb] = mi.wz * ri;
+    L.hx[nb] = h[0], L.hy[nb] = h[1], L.hz[nb] = h[2];
+    const ContactCoefficients& cs = sets[wall_coefficient_[k]];
+    L.set_coefficients(nb, cs);
+    lane_entry[nb++] = static_cast<std::int32_t>(k);
+    if (nb == ContactLanes::width) flush();
+  }
+  if (nb) flush();
+}
+
+}  // namespace tessera
