@@ -18,6 +18,7 @@ CouplingSettings CouplingSettings::from_config(const ConfigNode& c) {
   s.layout_tolerance = c.real("layout_tolerance", Dim::none, Range::closed(0, 0.25), s.layout_tolerance);
   s.partial.per_step = c.choice("partial_cells", {"step", "rate"}, "step") == "step";
   s.partial.rate = c.real("partial_cell_rate", Dim::none, Range::positive(), s.partial.rate);
+  s.partial.inertia = c.real("partial_cell_inertia", Dim::none, Range::closed(0, 1e6), s.partial.inertia);
   return s;
 }
 

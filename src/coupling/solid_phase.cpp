@@ -15,7 +15,7 @@ namespace tessera {
 SolidPhase::SolidPhase(const FluidGrid& grid, const DemSolver& dem, double fluid_density, double layout_tolerance,
                        PartialCells partial)
     : grid_(grid), partial_(partial), layout_step_(layout_tolerance * std::min({grid.h(0), grid.h(1), grid.h(2)})) {
-  for (int d = 0; d < 3; ++d) inv_h2_ += 1 / (3 * grid.h(d) * grid.h(d));
+  for (int d = 0; d < 3; ++d) inv_h2_ += 1 / (3 * grid.h(d) * grid.h(d)), inv_h_ += 1 / (3 * grid.h(d));
   const ParticleStore& p = dem.particles();
   int spheres = 0;
   for (std::size_t i = 0; i < p.owned; ++i) spheres |= p.shape[i] == 0;
@@ -192,7 +192,10 @@ void SolidPhase::solid_momentum(const DemSolver& dem) {
 // owner's (in loads_, kExchangeWidth per body).
 double SolidPhase::cell_rate(const FlowSolver& flow, std::size_t c) const {
   const double a = alpha_[c];
-  return partial_.rate * flow.viscosity()[c] / flow.density()[c] * inv_h2_ * a / (1 - a);
+  const double nu = flow.viscosity()[c] / flow.density()[c];
+  // C4c: viscous, times 1 + (1.75 / 150) Re for the inertial part (Ergun's ratio; Re = |u - U| h / nu).
+  const double inertial = slip_.empty() ? 0.0 : partial_.inertia * slip_[c] / (inv_h_ * nu);
+  return partial_.rate * nu * inv_h2_ * a / (1 - a) * (1 + inertial);
 }
 
 // `rate`: what the projection's drag (lambda dt capped at kMaxDrag) left of the relaxation
@@ -212,6 +215,7 @@ const CellDrag* SolidPhase::drag(const FlowSolver& flow, const DemSolver& dem, d
   }
   solid_momentum(dem);  // the bodies' velocities now
   const auto& rho = flow.density();
+  if (partial_.inertia > 0) slip_.assign(alpha_.size(), 0.0);
   for (int k = g.begin(2); k < g.end(2); ++k)
     for (int j = g.begin(1); j < g.end(1); ++j)
       for (int i = g.begin(0); i < g.end(0); ++i) {
@@ -222,6 +226,11 @@ const CellDrag* SolidPhase::drag(const FlowSolver& flow, const DemSolver& dem, d
           drag_.rate[c] = 0;
           for (auto& v : drag_.velocity) v[c] = 0;
           continue;
+        }
+        if (partial_.inertia > 0) {  // |u - U| at the step's start, for the rate's inertial part
+          double s2 = 0;
+          for (int d = 0; d < 3; ++d) s2 += std::pow(flow.velocity(d)[c] - solid_momentum_[d][c] / ms, 2);
+          slip_[c] = std::sqrt(s2);
         }
         drag_.rate[c] = std::min(cell_rate(flow, c), kMaxDrag / dt);
         for (int d = 0; d < 3; ++d) drag_.velocity[d][c] = solid_momentum_[d][c] / ms;
@@ -248,11 +257,24 @@ void SolidPhase::exchange_sums(const FlowSolver& flow, DemSolver& dem, double dt
       const double mf = rho_f[c] * cell_volume * std::max(0.0, 1 - alpha_[c]);
       if (mf == 0) continue;
       // The fluid's momentum moves by m_f chi (U' - u), chi = pull(); body b's share is m_bc / m_s.
-      const double mu = partial_.per_step ? mf * rho * volume_[e] / (mf + solid_mass_[c])
-                                          : mf * pull(flow, c, mf, solid_mass_[c], dt) * rho * volume_[e] / solid_mass_[c];
+      const double share = rho * volume_[e] / solid_mass_[c];
+      double mu = partial_.per_step ? mf * rho * volume_[e] / (mf + solid_mass_[c])
+                                    : mf * pull(flow, c, mf, solid_mass_[c], dt) * share;
       const auto idx = g.index(c);
       const Vec3 r = g.centre(idx[0], idx[1], idx[2]) - xb;
-      const Vec3 u{flow.velocity(0)[c], flow.velocity(1)[c], flow.velocity(2)[c]};
+      Vec3 u{flow.velocity(0)[c], flow.velocity(1)[c], flow.velocity(2)[c]};
+      if (dragged(c)) {
+        // C4c's reaction, implicit: the projection pulled the fluid towards the bodies' velocity at
+        // the step's start U0 with D = lambda dt; as if towards U' it would have moved by
+        // m_f D / (1 + D) (U' - u_D), u_D = U0 + (1 + D) (u - U0). One (mu, u) with both terms.
+        const double D = drag_.rate[c] * drag_dt_;
+        const double mu_d = mf * D / (1 + D) * share;
+        for (int d = 0; d < 3; ++d) {
+          const double u0 = drag_.velocity[d][c];
+          u[d] = (mu * u[d] + mu_d * (u0 + (1 + D) * (u[d] - u0))) / (mu + mu_d);
+        }
+        mu += mu_d;
+      }
       const Vec3 ru = cross(r, u);
       const double rr = dot(r, r);
       const double add[kWidth] = {mu,          mu * u.x,    mu * u.y,    mu * u.z,         mu * ru.x,        mu * ru.y,
@@ -320,12 +342,10 @@ void SolidPhase::fluid_loads(const FlowSolver& flow, DemSolver& dem) {
   const FluidGrid& g = grid_;
   ParticleStore& p = dem.particles();
   const bool viscous = !flow.stress_divergence(0).empty();
-  const bool dragged = drag_dt_ > 0;
   loads_.assign(6 * p.size(), 0.0);
   for (std::size_t n = 0; n < body_index_.size(); ++n) {
     const std::size_t b = body_index_[n];
     const Vec3 xb = p.pos(b);
-    const double rho_b = p.mass[b] / dem.shapes()[static_cast<std::size_t>(p.shape[b] - 1)].volume;
     Vec3 force, moment;
     for (std::size_t e = body_first_[n]; e < body_first_[n + 1]; ++e) {
       const std::size_t c = cell_[e];
@@ -333,14 +353,7 @@ void SolidPhase::fluid_loads(const FlowSolver& flow, DemSolver& dem) {
       Vec3 density = flow.pressure_force(idx[0], idx[1], idx[2]);  // N/m^3
       if (viscous)
         for (int d = 0; d < 3; ++d) density[d] += flow.stress_divergence(d)[c];
-      Vec3 f = density * volume_[e];
-      if (dragged && drag_.rate[c] > 0) {
-        // The projection pulled the cell's fluid, m_f = rho (1 - alpha_s) V_c, by the force
-        // m_f lambda (U - u) (u after the step); the body takes the opposite, its share m_bc / m_s.
-        const double mf = flow.density()[c] * g.cell_volume() * (1 - alpha_[c]);
-        const double k = mf * drag_.rate[c] * rho_b * volume_[e] / solid_mass_[c];
-        for (int d = 0; d < 3; ++d) f[d] += k * (flow.velocity(d)[c] - drag_.velocity[d][c]);
-      }
+      const Vec3 f = density * volume_[e];
       force += f;
       moment += cross(g.centre(idx[0], idx[1], idx[2]) - xb, f);
     }
@@ -372,8 +385,15 @@ void SolidPhase::correct_velocity(FlowSolver& flow, const DemSolver& dem, double
           for (int d = 0; d < 3; ++d) (*u[d])[c] = (mf * (*u[d])[c] + solid_momentum_[d][c]) / (mf + ms);
           continue;
         }
-        const double chi = pull(flow, c, mf, ms, dt);  // C4c
-        for (int d = 0; d < 3; ++d) (*u[d])[c] += chi * (solid_momentum_[d][c] / ms - (*u[d])[c]);
+        // C4c: the projection's drag moved to the bodies' velocity now (U' - U0), then the rest of
+        // the relaxation beyond the projection's cap.
+        const double chi = pull(flow, c, mf, ms, dt);
+        const double D = dragged(c) ? drag_.rate[c] * drag_dt_ : 0.0;
+        for (int d = 0; d < 3; ++d) {
+          const double U = solid_momentum_[d][c] / ms;
+          const double du = D > 0 ? D / (1 + D) * (U - drag_.velocity[d][c]) : 0.0;
+          (*u[d])[c] += du + chi * (U - (*u[d])[c]);
+        }
       }
   flow.velocity_changed();
 }

@@ -52,6 +52,9 @@ struct PartialCells {
   // kappa: chosen on the cubic sphere array of docs/validation.md (c = 0.216, 12 and 16 cells per
   // spacing); theory C4c.
   double rate = 25;
+  // c_E: the rate is times 1 + c_E |u - U| h / nu, the slip's inertia; Ergun's ratio of inertial to
+  // viscous coefficients by default (theory C4c); 0: viscous only.
+  double inertia = 1.75 / 150;
 };
 
 struct SolidPhaseStats {
@@ -80,7 +83,7 @@ class SolidPhase {
   // for FlowSolver::set_cell_drag; nullptr with the seed's correction.
   const CellDrag* drag(const FlowSolver& flow, const DemSolver& dem, double dt);
   static constexpr double kMaxDrag = 100;  // lambda dt in the projection at most (its coefficients)
-  // The fluid force and moment (C3, and the drag's reaction where the projection pulled the cells).
+  // The fluid force and moment (C3; the reaction to C4c's drag comes with the exchange, C4a).
   void fluid_loads(const FlowSolver& flow, DemSolver& dem);
   // dt: the flow step the exchange and the correction stand for (0 at the start: a partly covered
   // cell is left as it is, unless the correction is the seed's per-step one).
@@ -117,7 +120,9 @@ class SolidPhase {
   double cell_rate(const FlowSolver& flow, std::size_t c) const;  // lambda, before any cap
   CellDrag drag_;
   double drag_dt_ = 0;  // the step the drag was set for (0: none)
-  double inv_h2_ = 0;  // mean of 1 / h_d^2 over the three directions
+  bool dragged(std::size_t c) const { return drag_dt_ > 0 && drag_.rate[c] > 0; }
+  double inv_h2_ = 0, inv_h_ = 0;  // means of 1 / h_d^2 and 1 / h_d over the three directions
+  std::vector<double> slip_;  // |u - U| per cell at the step's start (the rate's inertial part)
   void solid_momentum(const DemSolver& dem);  // P_s per cell from the bodies' velocities now
   TetRasterizer raster_;
   // Lay-outs by body order key, kept while the body's rounded pose is unchanged.
