@@ -14,6 +14,7 @@ namespace tessera {
 
 using flow_cells::for_box;
 using flow_cells::kEmpty;
+using flow_cells::kFull;
 
 namespace {
 
@@ -28,7 +29,7 @@ inline double face_viscosity(double a, double b) { return a + b > 0 ? 2 * a * b 
 
 // One phase throughout (no interface in the cells): there the limited slope is safe.
 inline bool one_phase(double a, double b, double c) {
-  return (a <= kEmpty && b <= kEmpty && c <= kEmpty) || (a >= 1 - kEmpty && b >= 1 - kEmpty && c >= 1 - kEmpty);
+  return (a <= kEmpty && b <= kEmpty && c <= kEmpty) || (a >= 1 - kFull && b >= 1 - kFull && c >= 1 - kFull);
 }
 
 }  // namespace
