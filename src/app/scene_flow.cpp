@@ -15,16 +15,12 @@
 // volume, kinetic energy, maximum speed, front position), DIR/fields/fields.xmf (ParaView) and
 // DIR/checkpoint.h5 (restart with --restart, also written on SIGTERM / SIGUSR1).
 #include <algorithm>
-#include <array>
-#include <chrono>
 #include <cmath>
+#include <optional>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <limits>
 #include <map>
-#include <numbers>
-#include <sstream>
 
 #include "app/run_loop.hpp"
 #include "app/scenes.hpp"
