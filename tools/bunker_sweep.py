@@ -8,6 +8,11 @@ seed's figures need two slices of Table 2, not its full product:
   Fig. 9  release angle and speed over loft (56, 58, 60, 65 deg) x depth (0 to 10 mm) at --bounce;
   Fig. 7  the ball's velocity against time (the reference shot: --bounce, --loft, depth 0).
 `--full` runs all 60 combinations instead.
+`--ensemble N` runs N shots at the reference point (--loft, --bounce, depth 0) and at the slices'
+corners (lofts 56 and 65 at depths 0 and 10 mm, bounces 7 and 13): shot m is m x --perturbation
+deeper (2 um: a granular shot is chaotic, one shot scatters by about 4 % in speed). The table gives
+each point's mean, its standard error and one shot's standard deviation; the figures their error
+bars (two standard errors).
 
   tools/bunker_sweep.py run    [--case C] [--out D] [--jobs J] [--ranks R] [--full] [--set K=V ...]
       runs every job not yet completed in D (a job = one shot, D/<name>/summary.json), J at a time
@@ -24,7 +29,9 @@ import csv
 import itertools
 import json
 import os
+import re
 import shlex
+import statistics
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
@@ -36,8 +43,19 @@ LOFT = [56, 58, 60, 65]
 DEPTH_MM = [0, 2.5, 5, 7.5, 10]
 
 
-def job_name(bounce, loft, depth):
-    return "b%g_l%g_d%g" % (bounce, loft, depth)
+def job_name(bounce, loft, depth, member=0):
+    return "b%g_l%g_d%g" % (bounce, loft, depth) + ("_m%d" % member if member else "")
+
+
+NAME = re.compile(r"^b([0-9.]+)_l([0-9.]+)_d([0-9.]+)(?:_m([0-9]+))?$")
+
+
+def ensemble_points(args):
+    """The points that get --ensemble shots: the reference point and the corners of both slices."""
+    points = {(args.bounce, args.loft, 0.0)}
+    points |= {(args.bounce, l, d) for l in (LOFT[0], LOFT[-1]) for d in (DEPTH_MM[0], DEPTH_MM[-1])}
+    points |= {(b, args.loft, args.depth) for b in (BOUNCE[0], BOUNCE[-1])}
+    return points
 
 
 def jobs(args):
@@ -50,16 +68,18 @@ def jobs(args):
     for c in combos:
         if c not in seen:
             seen.add(c)
-            out.append(c)
+            out.append(c + (0,))
+    ens = ensemble_points(args)
+    out += [c[:3] + (m,) for c in out if tuple(float(x) for x in c[:3]) in ens for m in range(1, args.ensemble)]
     return out
 
 
 def command(args, combo, ranks):
-    b, l, d = combo
-    out = os.path.join(args.out, job_name(b, l, d))
+    b, l, d, m = combo
+    out = os.path.join(args.out, job_name(b, l, d, m))
     cmd = ["mpirun", "-np", str(ranks), TESSERA, "run", args.case, "--output", out, "--quiet",
            "--set", "club.bounce_deg=%g" % b, "--set", "club.loft_deg=%g" % l,
-           "--set", "club.shot_depth=%g" % (d / 1000)]
+           "--set", "club.shot_depth=%.9g" % (d / 1000 + m * args.perturbation)]
     for s in args.set:
         cmd += ["--set", s]
     return cmd, out
@@ -120,23 +140,20 @@ eval srun {tessera} $line
 
 
 def load(out):
+    """One row per completed shot; `member` is its place in its point's ensemble."""
     rows = []
     for name in sorted(os.listdir(out)):
         path = os.path.join(out, name, "summary.json")
-        if not os.path.isfile(path):
+        match = NAME.match(name)
+        if not match or not os.path.isfile(path):
             continue
         s = json.load(open(path))
         if s.get("status") != "completed":
             continue
-        club = s["case"]["club"]
         q = s["quantities"]
-        depth = club["shot_depth"]
-        if isinstance(depth, str) and depth.strip().endswith("mm"):
-            depth_mm = float(depth.strip()[:-2])
-        else:
-            depth_mm = round(1000 * float(str(depth).split()[0]), 6)
-        rows.append({"name": name, "bounce_deg": float(club["bounce_deg"]), "loft_deg": float(club["loft_deg"]),
-                     "depth_mm": depth_mm, "release_angle_deg": q["release_angle_deg"],
+        rows.append({"name": name, "bounce_deg": float(match.group(1)), "loft_deg": float(match.group(2)),
+                     "depth_mm": float(match.group(3)), "member": int(match.group(4) or 0),
+                     "release_angle_deg": q["release_angle_deg"],
                      "release_speed_mps": q["release_speed_mps"], "release_time_s": q["release_time"],
                      "club_upward_impulse": q["club_upward_impulse"],
                      "club_angular_velocity_loss": q["club_angular_velocity_loss"],
@@ -145,71 +162,118 @@ def load(out):
     return rows
 
 
+QUANTITIES = ["release_angle_deg", "release_speed_mps", "release_time_s", "club_upward_impulse",
+              "club_angular_velocity_loss"]
+
+
+def points(rows):
+    """Each design point's ensemble: the mean, its standard error and one shot's standard deviation
+    of every quantity (0 for a single shot), the shot count and the median wall time."""
+    groups = {}
+    for r in rows:
+        groups.setdefault((r["bounce_deg"], r["loft_deg"], r["depth_mm"]), []).append(r)
+    out = []
+    for (b, l, d), shots in sorted(groups.items()):
+        p = {"bounce_deg": b, "loft_deg": l, "depth_mm": d, "shots": len(shots),
+             "wall_s": statistics.median(r["wall_s"] for r in shots),
+             "ball_hit_wall": sum(1 for r in shots if r["ball_hit_wall"]),
+             "shot0": min(shots, key=lambda r: r["member"]), "members": shots}
+        for k in QUANTITIES:
+            v = [r[k] for r in shots]
+            sd = statistics.stdev(v) if len(v) > 1 else 0.0
+            p[k], p[k + "_sd"], p[k + "_stderr"] = statistics.fmean(v), sd, sd / len(v) ** 0.5
+        out.append(p)
+    return out
+
+
 def report(args):
     rows = load(args.out)
     if not rows:
         sys.exit("bunker sweep: no completed runs in %s" % args.out)
-    keys = ["bounce_deg", "loft_deg", "depth_mm", "release_angle_deg", "release_speed_mps", "release_time_s",
-            "club_upward_impulse", "club_angular_velocity_loss", "ball_hit_wall", "wall_s"]
+    keys = ["bounce_deg", "loft_deg", "depth_mm", "member"] + QUANTITIES + ["ball_hit_wall", "wall_s"]
+    with open(os.path.join(args.out, "release_shots.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=keys, extrasaction="ignore")
+        w.writeheader()
+        w.writerows(sorted(rows, key=lambda r: (r["bounce_deg"], r["loft_deg"], r["depth_mm"], r["member"])))
+    pts = points(rows)
+    keys = ["bounce_deg", "loft_deg", "depth_mm", "shots"] + [k + s for k in QUANTITIES for s in ("", "_stderr", "_sd")]
+    keys += ["ball_hit_wall", "wall_s"]
     with open(os.path.join(args.out, "release_table.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=keys, extrasaction="ignore")
         w.writeheader()
-        w.writerows(rows)
+        w.writerows(pts)
+
+    def pm(p, k, fmt):
+        return (fmt + " +- " + fmt) % (p[k], p[k + "_stderr"]) if p["shots"] > 1 else fmt % p[k]
     with open(os.path.join(args.out, "release_table.md"), "w") as f:
-        f.write("| bounce | loft | depth mm | release angle deg | release speed m/s | upward impulse | club loses rad/s |"
-                " wall s |\n|---|---|---|---|---|---|---|---|\n")
-        for r in sorted(rows, key=lambda r: (r["bounce_deg"], r["loft_deg"], r["depth_mm"])):
-            f.write("| %g | %g | %g | %.1f | %.2f | %.3f | %.1f | %.0f |\n" % (
-                r["bounce_deg"], r["loft_deg"], r["depth_mm"], r["release_angle_deg"], r["release_speed_mps"],
-                r["club_upward_impulse"], r["club_angular_velocity_loss"], r["wall_s"]))
+        f.write("| bounce | loft | depth mm | shots | release angle deg | release speed m/s | speed sd (one shot) |"
+                " upward impulse | club loses rad/s | wall s |\n|---|---|---|---|---|---|---|---|---|---|\n")
+        for p in pts:
+            f.write("| %g | %g | %g | %d | %s | %s | %s | %s | %s | %.0f |\n" % (
+                p["bounce_deg"], p["loft_deg"], p["depth_mm"], p["shots"], pm(p, "release_angle_deg", "%.1f"),
+                pm(p, "release_speed_mps", "%.2f"), "%.2f" % p["release_speed_mps_sd"] if p["shots"] > 1 else "",
+                pm(p, "club_upward_impulse", "%.3f"), pm(p, "club_angular_velocity_loss", "%.1f"), p["wall_s"]))
+        f.write("\n+- : one standard error of the ensemble's mean (shot m is m x %g um deeper).\n" %
+                (1e6 * args.perturbation))
     print(open(os.path.join(args.out, "release_table.md")).read())
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    # Fig. 7: the ball's velocity against time in the reference shot(s).
-    ref = [r for r in rows if r["depth_mm"] == 0 and r["bounce_deg"] == args.bounce]
+
+    def trace(r):
+        t, v = [], []
+        with open(os.path.join(r["dir"], "ball.csv")) as f:
+            for row in csv.DictReader(f):
+                t.append(1e3 * float(row["time"]))
+                v.append((float(row["ball_vx"]) ** 2 + float(row["ball_vz"]) ** 2) ** 0.5)
+        return t, v
+    # Fig. 7: the ball's speed against time in the reference shots, every ensemble member (thin).
+    ref = [p for p in pts if p["depth_mm"] == 0 and p["bounce_deg"] == args.bounce]
     if ref:
         fig, ax = plt.subplots(figsize=(5.5, 3.8))
-        for r in sorted(ref, key=lambda r: r["loft_deg"]):
-            t, vx, vz = [], [], []
-            with open(os.path.join(r["dir"], "ball.csv")) as f:
-                for row in csv.DictReader(f):
-                    t.append(1e3 * float(row["time"]))
-                    vx.append(float(row["ball_vx"]))
-                    vz.append(float(row["ball_vz"]))
-            ax.plot(t, [(a * a + b * b) ** 0.5 for a, b in zip(vx, vz)], label="loft %g deg" % r["loft_deg"])
-            ax.axvline(1e3 * r["release_time_s"], color=ax.lines[-1].get_color(), lw=0.6, ls=":")
+        for p in sorted(ref, key=lambda p: p["loft_deg"]):
+            line, = ax.plot(*trace(p["shot0"]), label="loft %g deg%s" % (
+                p["loft_deg"], " (%d shots)" % p["shots"] if p["shots"] > 1 else ""))
+            for r in p["members"]:
+                if r is not p["shot0"]:
+                    ax.plot(*trace(r), color=line.get_color(), lw=0.5, alpha=0.5)
+            ax.errorbar([1e3 * p["release_time_s"]], [p["release_speed_mps"]],
+                        xerr=[2e3 * p["release_time_s_stderr"]], yerr=[2 * p["release_speed_mps_stderr"]],
+                        color=line.get_color(), fmt="o", ms=3, capsize=3)
         ax.set_xlabel("time (ms)")
         ax.set_ylabel("ball speed (m/s)")
-        ax.set_title("Ball speed (bounce %g deg, depth 0); dotted: release" % args.bounce, fontsize=9)
+        ax.set_title("Ball speed (bounce %g deg, depth 0); dots: mean release +- 2 s.e." % args.bounce, fontsize=9)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
         fig.tight_layout()
         fig.savefig(os.path.join(args.out, "fig7_ball_velocity.png"), dpi=120)
         plt.close(fig)
     # Fig. 8: upward impulse against bounce.
-    sel = sorted([r for r in rows if r["loft_deg"] == args.loft and r["depth_mm"] == args.depth],
-                 key=lambda r: r["bounce_deg"])
+    sel = sorted([p for p in pts if p["loft_deg"] == args.loft and p["depth_mm"] == args.depth],
+                 key=lambda p: p["bounce_deg"])
     if sel:
         fig, ax = plt.subplots(figsize=(4.5, 3.5))
-        ax.plot([r["bounce_deg"] for r in sel], [r["club_upward_impulse"] for r in sel], "o-")
+        ax.errorbar([p["bounce_deg"] for p in sel], [p["club_upward_impulse"] for p in sel],
+                    yerr=[2 * p["club_upward_impulse_stderr"] for p in sel], fmt="o-", capsize=3)
         ax.set_xlabel("bounce angle (deg)")
         ax.set_ylabel("upward impulse / (m_club omega_0 L)")
-        ax.set_title("Club upward impulse (loft %g, depth %g mm)" % (args.loft, args.depth), fontsize=9)
+        ax.set_title("Club upward impulse (loft %g, depth %g mm; +- 2 s.e.)" % (args.loft, args.depth), fontsize=9)
         ax.grid(alpha=0.3)
         fig.tight_layout()
         fig.savefig(os.path.join(args.out, "fig8_upward_impulse.png"), dpi=120)
         plt.close(fig)
-    # Fig. 9: release angle and speed over loft x depth.
-    grid = [r for r in rows if r["bounce_deg"] == args.bounce]
-    lofts = sorted({r["loft_deg"] for r in grid})
-    depths = sorted({r["depth_mm"] for r in grid})
+    # Fig. 9: release angle and speed over loft x depth: contours of the means, then against depth
+    # per loft with error bars.
+    grid = [p for p in pts if p["bounce_deg"] == args.bounce]
+    lofts = sorted({p["loft_deg"] for p in grid})
+    depths = sorted({p["depth_mm"] for p in grid})
     if len(lofts) > 1 and len(depths) > 1:
-        at = {(r["loft_deg"], r["depth_mm"]): r for r in grid}
+        at = {(p["loft_deg"], p["depth_mm"]): p for p in grid}
         if all((l, d) in at for l in lofts for d in depths):
-            fig, axes = plt.subplots(1, 2, figsize=(9, 3.8))
-            for ax, key, label in ((axes[0], "release_angle_deg", "release angle (deg)"),
-                                   (axes[1], "release_speed_mps", "release speed (m/s)")):
+            fig, axes = plt.subplots(2, 2, figsize=(9, 7.2))
+            for col, (key, label) in enumerate((("release_angle_deg", "release angle (deg)"),
+                                                ("release_speed_mps", "release speed (m/s)"))):
+                ax = axes[0][col]
                 z = [[at[(l, d)][key] for l in lofts] for d in depths]
                 cs = ax.contourf(lofts, depths, z, levels=12, cmap="viridis")
                 ax.contour(lofts, depths, z, levels=12, colors="k", linewidths=0.3)
@@ -218,11 +282,21 @@ def report(args):
                 ax.set_xlabel("loft angle (deg)")
                 ax.set_ylabel("shot depth below the reference (mm)")
                 ax.invert_yaxis()
-            fig.suptitle("Release angle and speed (bounce %g deg)" % args.bounce, fontsize=10)
+                ax = axes[1][col]
+                for l in lofts:
+                    ax.errorbar(depths, [at[(l, d)][key] for d in depths],
+                                yerr=[2 * at[(l, d)][key + "_stderr"] for d in depths], fmt="o-", ms=3, capsize=3,
+                                label="loft %g" % l)
+                ax.set_xlabel("shot depth below the reference (mm)")
+                ax.set_ylabel(label)
+                ax.grid(alpha=0.3)
+                ax.legend(fontsize=7)
+            fig.suptitle("Release angle and speed (bounce %g deg; means, error bars +- 2 s.e. where an "
+                         "ensemble ran)" % args.bounce, fontsize=10)
             fig.tight_layout()
             fig.savefig(os.path.join(args.out, "fig9_release.png"), dpi=120)
             plt.close(fig)
-    print("bunker sweep: report in %s (release_table.csv/.md, fig7/8/9 PNGs)" % args.out)
+    print("bunker sweep: report in %s (release_table.csv/.md, release_shots.csv, fig7/8/9 PNGs)" % args.out)
 
 
 def main():
@@ -237,6 +311,8 @@ def main():
     ap.add_argument("--loft", type=float, default=58, help="the loft of the bounce slice (Fig. 8)")
     ap.add_argument("--depth", type=float, default=0, help="the depth (mm) of the bounce slice (Fig. 8)")
     ap.add_argument("--set", action="append", default=[], help="another case override for every job")
+    ap.add_argument("--ensemble", type=int, default=1, help="shots at the reference point and the corners")
+    ap.add_argument("--perturbation", type=float, default=2e-6, help="depth step between ensemble members (m)")
     ap.add_argument("--partition", default="")
     ap.add_argument("--time", default="00:30:00")
     args = ap.parse_args()

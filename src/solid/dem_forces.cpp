@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // The DEM's force stage (DemSolver::compute_forces): the contact law's coefficients per pair and
 // per wall, then the pair, plane-wall, mesh-wall and free-sphere forces, accumulated through the lane
-// kernel (contact_kernel.hpp) into k_force_; shaped bodies' element forces with their levers.
+// kernel (contact_kernel.hpp) into the contact buffer (kernel_mirrors.hpp: 3D, or discs in plane
+// mode); shaped bodies' element forces with their levers.
 #include <algorithm>
 #include <cmath>
 #include <unordered_map>
@@ -22,7 +23,7 @@ void DemSolver::add_lever(KernelForce& f, const KernelGeometry& g, std::size_t b
 
 void DemSolver::store_forces() {
   for (std::size_t i = 0; i < p_.owned; ++i) {
-    const KernelForce& fo = k_force_[i];
+    const KernelForce fo = contact_load(i);
     p_.f[3 * i] = fo.fx, p_.f[3 * i + 1] = fo.fy, p_.f[3 * i + 2] = fo.fz;
     p_.torque[3 * i] = fo.tx, p_.torque[3 * i + 1] = fo.ty, p_.torque[3 * i + 2] = fo.tz;
   }
@@ -136,30 +137,131 @@ void DemSolver::compute_forces(bool update_history) {
   }
 }
 
+// The pair loop's access to one mirror layout: packing a body's mirror, pass 1's overlap test, the
+// partner's prefetches, the gather of a pair into a lane and the accumulation of its force.
+struct DemSolver::SphereMirrors {  // 3D mirrors per element (spheres, shaped bodies' elements)
+  DemSolver& s;
+  KernelGeometry* g;
+  KernelMotion* m;
+  KernelForce* out;
+  bool sh;
+  void pack(std::size_t i) {
+    const double* x = &s.p_.x[3 * i];
+    const double* v = &s.p_.v[3 * i];
+    const double* w = &s.p_.omega[3 * i];
+    g[i] = {x[0], x[1], x[2], s.p_.radius[i]};
+    m[i] = {v[0], v[1], v[2], w[0], w[1], w[2]};
+  }
+  bool touching(std::size_t a, std::size_t b) const {
+    const KernelGeometry &ga = g[a], &gb = g[b];
+    const double dx = ga.x - gb.x, dy = ga.y - gb.y, dz = ga.z - gb.z, rsum = ga.r + gb.r;
+    return dx * dx + dy * dy + dz * dz < rsum * rsum;
+  }
+  void prefetch_geometry(std::size_t b) const { __builtin_prefetch(&g[b]); }
+  void prefetch_partner(std::size_t b) const {
+    __builtin_prefetch(&g[b]);
+    __builtin_prefetch(&m[b]);
+    __builtin_prefetch(&out[b], 1);
+  }
+  void gather(ContactLanes& L, std::size_t j, std::size_t a, std::size_t b) const {
+    const KernelGeometry &ga = g[a], &gb = g[b];
+    const KernelMotion &ma = m[a], &mb = m[b];
+    L.dx[j] = ga.x - gb.x, L.dy[j] = ga.y - gb.y, L.dz[j] = ga.z - gb.z;
+    L.ra[j] = ga.r, L.rb[j] = gb.r;
+    L.vx[j] = ma.vx - mb.vx, L.vy[j] = ma.vy - mb.vy, L.vz[j] = ma.vz - mb.vz;
+    L.wx[j] = ma.wx * ga.r + mb.wx * gb.r;
+    L.wy[j] = ma.wy * ga.r + mb.wy * gb.r;
+    L.wz[j] = ma.wz * ga.r + mb.wz * gb.r;
+  }
+  void accumulate(const ContactLanes& L, std::size_t j, std::size_t ea, std::size_t eb) {
+    const std::size_t a = sh ? static_cast<std::size_t>(s.e_body_[ea]) : ea;
+    const std::size_t b = sh ? static_cast<std::size_t>(s.e_body_[eb]) : eb;
+    KernelForce &fa = out[a], &fb = out[b];
+    fa.fx += L.fx[j], fa.fy += L.fy[j], fa.fz += L.fz[j];
+    fb.fx -= L.fx[j], fb.fy -= L.fy[j], fb.fz -= L.fz[j];
+    fa.tx -= L.nx[j] * L.ra[j], fa.ty -= L.ny[j] * L.ra[j], fa.tz -= L.nz[j] * L.ra[j];
+    fb.tx -= L.nx[j] * L.rb[j], fb.ty -= L.ny[j] * L.rb[j], fb.tz -= L.nz[j] * L.rb[j];
+    if (sh) {
+      s.add_lever(fa, g[ea], a, L.fx[j], L.fy[j], L.fz[j]);
+      s.add_lever(fb, g[eb], b, -L.fx[j], -L.fy[j], -L.fz[j]);
+    }
+  }
+};
+
+template <int N>
+struct DemSolver::DiscMirrors {  // plane mode, normal along axis N (kernel_mirrors.hpp)
+  static constexpr int U = plane_u(N), V = plane_v(N);
+  DemSolver& s;
+  DiscMirror* g;
+  DiscForce* out;
+  void pack(std::size_t i) {
+    const double* x = &s.p_.x[3 * i];
+    const double* v = &s.p_.v[3 * i];
+    g[i] = {x[U], x[V], s.p_.radius[i], v[U], v[V], s.p_.omega[3 * i + N]};
+  }
+  bool touching(std::size_t a, std::size_t b) const {
+    const DiscMirror &ga = g[a], &gb = g[b];
+    const double du = ga.u - gb.u, dv = ga.v - gb.v, rsum = ga.r + gb.r;
+    return du * du + dv * dv < rsum * rsum;
+  }
+  void prefetch_geometry(std::size_t b) const { __builtin_prefetch(&g[b]); }
+  void prefetch_partner(std::size_t b) const {
+    __builtin_prefetch(&g[b]);
+    __builtin_prefetch(&out[b], 1);
+  }
+  void gather(ContactLanes& L, std::size_t j, std::size_t a, std::size_t b) const {
+    const DiscMirror &ga = g[a], &gb = g[b];
+    double* d[3] = {L.dx, L.dy, L.dz};
+    double* v[3] = {L.vx, L.vy, L.vz};
+    double* w[3] = {L.wx, L.wy, L.wz};
+    d[U][j] = ga.u - gb.u, d[V][j] = ga.v - gb.v, d[N][j] = 0.0;
+    L.ra[j] = ga.r, L.rb[j] = gb.r;
+    v[U][j] = ga.vu - gb.vu, v[V][j] = ga.vv - gb.vv, v[N][j] = 0.0;
+    w[U][j] = 0.0, w[V][j] = 0.0, w[N][j] = ga.wn * ga.r + gb.wn * gb.r;
+  }
+  void accumulate(const ContactLanes& L, std::size_t j, std::size_t a, std::size_t b) {
+    const double* f[3] = {L.fx, L.fy, L.fz};
+    const double* nf[3] = {L.nx, L.ny, L.nz};
+    DiscForce &fa = out[a], &fb = out[b];
+    fa.fu += f[U][j], fa.fv += f[V][j];
+    fb.fu -= f[U][j], fb.fv -= f[V][j];
+    fa.tn -= nf[N][j] * L.ra[j];
+    fb.tn -= nf[N][j] * L.rb[j];
+  }
+};
+
 void DemSolver::compute_pair_forces(double dt, bool update_history) {
+  const std::size_t n = shaped() ? e_body_.size() : p_.size();
+  if (!disc_mirrors()) {
+    k_geometry_.resize(n);
+    k_motion_.resize(n);
+    // Forces go straight to bodies (shaped mode: element forces with their lever arms, in pair
+    // order, which is canonical as for spheres), so the buffer is one slot per body.
+    k_force_.assign(p_.size(), KernelForce{0, 0, 0, 0, 0, 0});
+    SphereMirrors view{*this, k_geometry_.data(), k_motion_.data(), k_force_.data(), shaped()};
+    pair_forces(view, dt, update_history);
+    return;
+  }
+  k_disc_.resize(n);
+  k_disc_force_.assign(n, DiscForce{0, 0, 0});
+  auto run = [&](auto view) { pair_forces(view, dt, update_history); };
+  switch (plane_normal()) {
+    case 0: run(DiscMirrors<0>{*this, k_disc_.data(), k_disc_force_.data()}); break;
+    case 1: run(DiscMirrors<1>{*this, k_disc_.data(), k_disc_force_.data()}); break;
+    default: run(DiscMirrors<2>{*this, k_disc_.data(), k_disc_force_.data()}); break;
+  }
+}
+
+template <class Mirrors>
+void DemSolver::pair_forces(Mirrors& view, double dt, bool update_history) {
   const std::size_t n = shaped() ? e_body_.size() : p_.size();
   const std::size_t np = list_.size();
   const std::int32_t* first = list_.first.data();
   const std::int32_t* second = list_.second.data();
   double* hist = list_.history.data();
-  k_geometry_.resize(n);
-  k_motion_.resize(n);
-  // Forces go straight to bodies (shaped mode: element forces with their lever arms, in pair order,
-  // which is canonical as for spheres), so the buffer is one slot per body.
-  const bool sh = shaped();
-  k_force_.assign(p_.size(), KernelForce{0, 0, 0, 0, 0, 0});
   // Owned bodies were packed by integrate_first unless a rebuild moved them; ghosts always here.
   // (Shaped mode: every element was packed by update_elements.)
-  for (std::size_t i = shaped() ? n : (owned_mirrors_current_ ? p_.owned : 0); i < n; ++i) {
-    const double* x = &p_.x[3 * i];
-    const double* v = &p_.v[3 * i];
-    const double* w = &p_.omega[3 * i];
-    k_geometry_[i] = {x[0], x[1], x[2], p_.radius[i]};
-    k_motion_[i] = {v[0], v[1], v[2], w[0], w[1], w[2]};
-  }
-  const KernelGeometry* g = k_geometry_.data();
-  const KernelMotion* m = k_motion_.data();
-  KernelForce* out = k_force_.data();
+  for (std::size_t i = shaped() ? n : (owned_mirrors_current_ ? p_.owned : 0); i < n; ++i) view.pack(i);
   // Pass 1, branch-free: which listed pairs touch (about half of them in a dense bed, at random,
   // which a branch would mispredict). The compacted list keeps the canonical order.
   touching_.resize(np);
@@ -168,12 +270,9 @@ void DemSolver::compute_pair_forces(double dt, bool update_history) {
   // from memory. Pass 1 spends a few ns a pair, so it looks further ahead than pass 2.
   constexpr std::size_t ahead = 16, ahead1 = 64;
   for (std::size_t k = 0; k < np; ++k) {
-    if (k + ahead1 < np) __builtin_prefetch(&g[second[k + ahead1]]);
-    const KernelGeometry& a = g[first[k]];
-    const KernelGeometry& b = g[second[k]];
-    const double dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z, rsum = a.r + b.r;
+    if (k + ahead1 < np) view.prefetch_geometry(second[k + ahead1]);
     touching_[nt] = static_cast<std::int32_t>(k);
-    nt += (dx * dx + dy * dy + dz * dz < rsum * rsum) ? 1 : 0;
+    nt += view.touching(first[k], second[k]) ? 1 : 0;
   }
   touching_.resize(nt);
   if (shaped())
@@ -199,50 +298,27 @@ void DemSolver::compute_pair_forces(double dt, bool update_history) {
         // The partner's lines (pass 1 read its geometry long ago: a large bed's mirrors leave the
         // cache in between), the pair's history and its coefficient set.
         const std::size_t kk = static_cast<std::size_t>(touching_[s + j + ahead]);
-        __builtin_prefetch(&g[second[kk]]);
-        __builtin_prefetch(&m[second[kk]]);
-        __builtin_prefetch(&out[second[kk]], 1);
+        view.prefetch_partner(second[kk]);
         __builtin_prefetch(&hist[3 * kk], 1);
         __builtin_prefetch(&sets[pc[kk]]);
       }
       const std::size_t k = static_cast<std::size_t>(touching_[s + j]);
-      const std::size_t a = first[k], b = second[k];
-      const KernelGeometry &ga = g[a], &gb = g[b];
-      const KernelMotion &ma = m[a], &mb = m[b];
-      L.dx[j] = ga.x - gb.x, L.dy[j] = ga.y - gb.y, L.dz[j] = ga.z - gb.z;
-      L.ra[j] = ga.r, L.rb[j] = gb.r;
-      L.vx[j] = ma.vx - mb.vx, L.vy[j] = ma.vy - mb.vy, L.vz[j] = ma.vz - mb.vz;
-      L.wx[j] = ma.wx * ga.r + mb.wx * gb.r;
-      L.wy[j] = ma.wy * ga.r + mb.wy * gb.r;
-      L.wz[j] = ma.wz * ga.r + mb.wz * gb.r;
+      view.gather(L, j, first[k], second[k]);
       L.hx[j] = hist[3 * k], L.hy[j] = hist[3 * k + 1], L.hz[j] = hist[3 * k + 2];
-      const ContactCoefficients& cs = sets[pc[k]];
-      L.set_coefficients(j, cs);
+      L.set_coefficients(j, sets[pc[k]]);
     }
     evaluate_contacts(model_.law(), L, nb, dt);
     for (std::size_t j = 0; j < nb; ++j) {
       const std::size_t k = static_cast<std::size_t>(touching_[s + j]);
       hist[3 * k] = L.hx[j], hist[3 * k + 1] = L.hy[j], hist[3 * k + 2] = L.hz[j];
-      const std::size_t a = sh ? static_cast<std::size_t>(e_body_[first[k]]) : first[k];
-      const std::size_t b = sh ? static_cast<std::size_t>(e_body_[second[k]]) : second[k];
-      KernelForce &fa = out[a], &fb = out[b];
-      fa.fx += L.fx[j], fa.fy += L.fy[j], fa.fz += L.fz[j];
-      fb.fx -= L.fx[j], fb.fy -= L.fy[j], fb.fz -= L.fz[j];
-      fa.tx -= L.nx[j] * L.ra[j], fa.ty -= L.ny[j] * L.ra[j], fa.tz -= L.nz[j] * L.ra[j];
-      fb.tx -= L.nx[j] * L.rb[j], fb.ty -= L.ny[j] * L.rb[j], fb.tz -= L.nz[j] * L.rb[j];
-      if (sh) {
-        add_lever(fa, g[first[k]], a, L.fx[j], L.fy[j], L.fz[j]);
-        add_lever(fb, g[second[k]], b, -L.fx[j], -L.fy[j], -L.fz[j]);
-      }
+      view.accumulate(L, j, first[k], second[k]);
     }
   }
   if (update_history) touching_before_.swap(touching_);
 }
 
 void DemSolver::compute_wall_forces(double dt) {
-  // Entities are elements (bodies for spheres), read from the kernel mirrors packed this step.
-  const KernelGeometry* g = k_geometry_.data();
-  const KernelMotion* m = k_motion_.data();
+  // Entities are elements (bodies for spheres), read as the kernel mirrors packed this step.
   const bool sh = shaped();
   // Walls: bodies near a wall at the last rebuild, in (body, wall) order; same lanes and law.
   const auto& prims = walls_.primitives();
@@ -270,7 +346,7 @@ void DemSolver::compute_wall_forces(double dt) {
     const std::size_t s = wall_slot_[k];
     double* h = sh ? &wall_hist_[3 * k] : &p_.wall_history[3 * (i * slots + s)];
     Vec3 nrm;
-    const KernelGeometry& gi = g[i];
+    const KernelGeometry gi = geometry(i);
     const double ri = gi.r;
     const double delta = prims[s].overlap(Vec3{gi.x, gi.y, gi.z}, ri, nrm);
     if (delta <= 0.0) {
@@ -280,7 +356,7 @@ void DemSolver::compute_wall_forces(double dt) {
       continue;
     }
     if (sh) element_motion(i);
-    const KernelMotion& mi = m[i];
+    const KernelMotion mi = motion(i);
     L.dx[nb] = nrm.x, L.dy[nb] = nrm.y, L.dz[nb] = nrm.z;
     L.ra[nb] = ri, L.rb[nb] = delta;
     L.vx[nb] = mi.vx, L.vy[nb] = mi.vy, L.vz[nb] = mi.vz;

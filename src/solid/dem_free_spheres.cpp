@@ -62,8 +62,6 @@ void DemSolver::compute_free_sphere_forces(double dt) {
   // Owned grains against the spheres, with the body-body law (d = x_grain - x_sphere); the
   // reaction goes into mesh_loads_ with target meshes + sphere, summed by sum_mesh_loads.
   for (auto& s : free_) s.force = s.torque = Vec3{};
-  const KernelGeometry* g = k_geometry_.data();
-  const KernelMotion* mo = k_motion_.data();
   const bool sh = shaped();
   ContactLanes& L = lanes_;
   const ContactCoefficients* sets = coefficient_sets_.data();
@@ -90,19 +88,21 @@ void DemSolver::compute_free_sphere_forces(double dt) {
     const std::size_t e = static_cast<std::size_t>(free_entity_[k]);
     const int b = free_of_[k];
     const FreeSphere& s = free_[static_cast<std::size_t>(b)];
-    const double dx = g[e].x - s.x.x, dy = g[e].y - s.x.y, dz = g[e].z - s.x.z;
-    const double reach = g[e].r + s.radius;
+    const KernelGeometry ge = geometry(e);
+    const double dx = ge.x - s.x.x, dy = ge.y - s.x.y, dz = ge.z - s.x.z;
+    const double reach = ge.r + s.radius;
     if (dx * dx + dy * dy + dz * dz >= reach * reach) continue;
     if (sh) element_motion(e);
+    const KernelMotion me = motion(e);
     const std::int64_t ekey = sh ? e_key_[e] : p_.order[e];
     keys[nb] = free_sphere_key(ekey, b);
     const std::array<double, 3> h = spring_or_zero(mesh_hist_, keys[nb]);
     L.dx[nb] = dx, L.dy[nb] = dy, L.dz[nb] = dz;
-    L.ra[nb] = g[e].r, L.rb[nb] = s.radius;
-    L.vx[nb] = mo[e].vx - s.v.x, L.vy[nb] = mo[e].vy - s.v.y, L.vz[nb] = mo[e].vz - s.v.z;
-    L.wx[nb] = mo[e].wx * g[e].r + s.omega.x * s.radius;
-    L.wy[nb] = mo[e].wy * g[e].r + s.omega.y * s.radius;
-    L.wz[nb] = mo[e].wz * g[e].r + s.omega.z * s.radius;
+    L.ra[nb] = ge.r, L.rb[nb] = s.radius;
+    L.vx[nb] = me.vx - s.v.x, L.vy[nb] = me.vy - s.v.y, L.vz[nb] = me.vz - s.v.z;
+    L.wx[nb] = me.wx * ge.r + s.omega.x * s.radius;
+    L.wy[nb] = me.wy * ge.r + s.omega.y * s.radius;
+    L.wz[nb] = me.wz * ge.r + s.omega.z * s.radius;
     L.hx[nb] = h[0], L.hy[nb] = h[1], L.hz[nb] = h[2];
     const ContactCoefficients& cs = sets[free_coefficient_[k]];
     L.set_coefficients(nb, cs);

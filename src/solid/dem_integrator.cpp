@@ -120,7 +120,9 @@ void DemSolver::integrate_first_impl() {
   // fold_turns applies to q at the next rebuild or output (a 2D orientation is one angle).
   double* __restrict turn = turn_.data();
   const int normal = std::max(0, plane_normal());
-  owned_mirrors_current_ = kSpheres && k_geometry_.size() >= n && k_motion_.size() >= n;
+  constexpr bool kDiscs = kBodies == Bodies::discs;
+  owned_mirrors_current_ = kDiscs ? k_disc_.size() >= n : kSpheres && k_geometry_.size() >= n && k_motion_.size() >= n;
+  const int plane_a = plane_u(normal), plane_b = plane_v(normal);
   const double* x0 = x_build_.data();
   const double* xm = x_moving_build_.data();
   double moved2 = 0, moved_since_walls2 = 0;
@@ -128,6 +130,7 @@ void DemSolver::integrate_first_impl() {
   const bool both = kSpheres && kick_pending_;
   kick_pending_ = false;
   const KernelForce* __restrict kf = k_force_.data();
+  const DiscForce* __restrict kd = k_disc_force_.data();
   for (std::size_t i = 0; i < n; ++i) {
     // The body arrays are page-aligned allocations of equal size: a store to v[j] followed by a
     // load of x[j] would stall (4K aliasing). Load a body's values first, then store.
@@ -135,7 +138,12 @@ void DemSolver::integrate_first_impl() {
     double vi[3], wi[3], xi[3], fi[3], ti[3];
     for (int k = 0; k < 3; ++k) vi[k] = v[3 * i + k], wi[k] = w[3 * i + k];
     if (both) {
-      fi[0] = kf[i].fx, fi[1] = kf[i].fy, fi[2] = kf[i].fz, ti[0] = kf[i].tx, ti[1] = kf[i].ty, ti[2] = kf[i].tz;
+      if constexpr (kDiscs) {
+        fi[0] = fi[1] = fi[2] = ti[0] = ti[1] = ti[2] = 0.0;
+        fi[plane_a] = kd[i].fu, fi[plane_b] = kd[i].fv, ti[normal] = kd[i].tn;
+      } else {
+        fi[0] = kf[i].fx, fi[1] = kf[i].fy, fi[2] = kf[i].fz, ti[0] = kf[i].tx, ti[1] = kf[i].ty, ti[2] = kf[i].tz;
+      }
       if constexpr (kExternal)
         for (int k = 0; k < 3; ++k) fi[k] += fe[3 * i + k], ti[k] += te[3 * i + k];
       for (int k = 0; k < 3; ++k) {
@@ -155,8 +163,12 @@ void DemSolver::integrate_first_impl() {
     for (int k = 0; k < 3; ++k) v[3 * i + k] = vi[k], w[3 * i + k] = wi[k], x[3 * i + k] = xi[k];
     if constexpr (kSpheres) {
       if (owned_mirrors_current_) {
-        k_geometry_[i] = {xi[0], xi[1], xi[2], p_.radius[i]};
-        k_motion_[i] = {vi[0], vi[1], vi[2], wi[0], wi[1], wi[2]};
+        if constexpr (kDiscs) {
+          k_disc_[i] = {xi[plane_a], xi[plane_b], p_.radius[i], vi[plane_a], vi[plane_b], wi[normal]};
+        } else {
+          k_geometry_[i] = {xi[0], xi[1], xi[2], p_.radius[i]};
+          k_motion_[i] = {vi[0], vi[1], vi[2], wi[0], wi[1], wi[2]};
+        }
       }
       if constexpr (kBodies == Bodies::discs)
         turn[i] += dt * wi[normal];
@@ -196,7 +208,7 @@ void DemSolver::integrate_second_impl() {
   double* __restrict w = p_.omega.data();
   double* __restrict f = p_.f.data();
   double* __restrict t = p_.torque.data();
-  const KernelForce* __restrict in = k_force_.data();
+
   const double* __restrict fe = p_.f_ext.data();
   const double* __restrict te = p_.t_ext.data();
   const double* __restrict inv_m = inv_mass_.data();
@@ -205,7 +217,8 @@ void DemSolver::integrate_second_impl() {
   const double* vmask = velocity_mask_.data();
   const double* wmask = spin_mask_.data();
   for (std::size_t i = 0; i < n; ++i) {
-    const double fi[3] = {in[i].fx, in[i].fy, in[i].fz}, ti[3] = {in[i].tx, in[i].ty, in[i].tz};
+    const KernelForce in = contact_load(i);
+    const double fi[3] = {in.fx, in.fy, in.fz}, ti[3] = {in.tx, in.ty, in.tz};
     double fa[3] = {fi[0], fi[1], fi[2]}, ta[3] = {ti[0], ti[1], ti[2]};  // what accelerates the body
     if constexpr (kExternal)
       for (int k = 0; k < 3; ++k) fa[k] += fe[3 * i + k], ta[k] += te[3 * i + k];

@@ -111,8 +111,6 @@ void DemSolver::compute_mesh_forces(double dt) {
   // rolling over a flat mesh keeps its spring across triangle edges.
   auto& meshes = walls_.meshes();
   for (auto& m : meshes) m.force = m.moment = Vec3{};
-  const KernelGeometry* g = k_geometry_.data();
-  const KernelMotion* mo = k_motion_.data();
   const bool sh = shaped();
   ContactLanes& L = lanes_;
   const ContactCoefficients* sets = coefficient_sets_.data();
@@ -123,11 +121,13 @@ void DemSolver::compute_mesh_forces(double dt) {
   for (std::size_t k = 0; k < mesh_entity_.size(); ++k) {
     const std::size_t e = mesh_entity_[k];
     MeshWall& m = meshes[mesh_of_[k]];
-    const Vec3 c{g[e].x, g[e].y, g[e].z};
+    const KernelGeometry ge = geometry(e);
+    const Vec3 c{ge.x, ge.y, ge.z};
     cands.assign(mesh_cands_.begin() + mesh_cand_start_[k], mesh_cands_.begin() + mesh_cand_start_[k + 1]);
-    const auto contacts = sphere_mesh_contacts(c, g[e].r, m.nodes, m.triangles, cands);
+    const auto contacts = sphere_mesh_contacts(c, ge.r, m.nodes, m.triangles, cands);
     if (contacts.empty()) continue;
     if (sh) element_motion(e);
+    const KernelMotion me = motion(e);
     const std::int64_t ekey = sh ? e_key_[e] : p_.order[e];
     std::size_t nb = 0;
     std::uint64_t keys[ContactLanes::width];
@@ -136,9 +136,9 @@ void DemSolver::compute_mesh_forces(double dt) {
       const TriangleContact& tc = contacts[j];
       const Vec3 vw = m.velocity_at(tc.point);
       L.dx[nb] = tc.normal.x, L.dy[nb] = tc.normal.y, L.dz[nb] = tc.normal.z;
-      L.ra[nb] = g[e].r, L.rb[nb] = tc.overlap;
-      L.vx[nb] = mo[e].vx - vw.x, L.vy[nb] = mo[e].vy - vw.y, L.vz[nb] = mo[e].vz - vw.z;
-      L.wx[nb] = mo[e].wx * g[e].r, L.wy[nb] = mo[e].wy * g[e].r, L.wz[nb] = mo[e].wz * g[e].r;
+      L.ra[nb] = ge.r, L.rb[nb] = tc.overlap;
+      L.vx[nb] = me.vx - vw.x, L.vy[nb] = me.vy - vw.y, L.vz[nb] = me.vz - vw.z;
+      L.wx[nb] = me.wx * ge.r, L.wy[nb] = me.wy * ge.r, L.wz[nb] = me.wz * ge.r;
       keys[nb] = mesh_key(ekey, mesh_of_[k], static_cast<int>(j));
       points[nb] = tc.point;
       const std::array<double, 3> h = spring_or_zero(mesh_hist_, keys[nb]);

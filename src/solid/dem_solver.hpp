@@ -33,6 +33,7 @@
 #include "solid/contact_history.hpp"
 #include "solid/contact_kernel.hpp"
 #include "solid/contact_model.hpp"
+#include "solid/kernel_mirrors.hpp"
 #include "solid/free_spheres.hpp"
 #include "solid/halo.hpp"
 #include "solid/neighbor_list.hpp"
@@ -188,6 +189,12 @@ class DemSolver {
   // Both accumulate into the contact buffer k_force_; integrate_second (or store_forces) moves the
   // totals into the bodies' f and torque.
   void compute_pair_forces(double dt, bool update_history);
+  // The pair loop over one mirror layout (dem_forces.cpp: SphereMirrors, DiscMirrors<n>).
+  struct SphereMirrors;
+  template <int N>
+  struct DiscMirrors;
+  template <class Mirrors>
+  void pair_forces(Mirrors& mirrors, double dt, bool update_history);
   void compute_wall_forces(double dt);
   void store_forces();
   void fill_coefficients();  // the law's coefficients of every pair and wall contact in the lists
@@ -242,23 +249,46 @@ class DemSolver {
   // (body, wall slot) pairs within reach of a wall at the last rebuild: no other body can touch a
   // wall before the next one (static walls; bodies move less than skin/2 in between).
   std::vector<std::int32_t> wall_body_, wall_slot_, wall_coefficient_;  // + index into coefficient_sets_
-  // Kernel mirrors of the body arrays, one cache line or half of one per body, packed each step:
-  // a contact then touches 3 lines per partner instead of 7-8 scattered arrays.
-  struct alignas(32) KernelGeometry {
-    double x, y, z, r;
-  };
-  struct alignas(64) KernelMotion {
-    double vx, vy, vz, wx, wy, wz;
-  };
-  struct alignas(64) KernelForce {
-    double fx, fy, fz, tx, ty, tz;
-  };
+  // Kernel mirrors of the body arrays and the contact buffer (kernel_mirrors.hpp): 3D mirrors per
+  // element, or (disc_mirrors(): plane mode, spheres) one disc mirror and disc force slot per body.
   std::vector<KernelGeometry> k_geometry_;
   std::vector<KernelMotion> k_motion_;
   std::vector<KernelForce> k_force_;  // per local body
+  std::vector<DiscMirror> k_disc_;
+  std::vector<DiscForce> k_disc_force_;  // per local body
+  bool disc_mirrors() const { return plane_mode() && !shaped(); }
+  // Element e's geometry and motion as the contacts of walls, meshes and free spheres read them
+  // (the same values as the mirrors': a disc's from the body arrays).
+  KernelGeometry geometry(std::size_t e) const {
+    if (!disc_mirrors()) return k_geometry_[e];
+    return {p_.x[3 * e], p_.x[3 * e + 1], p_.x[3 * e + 2], p_.radius[e]};
+  }
+  KernelMotion motion(std::size_t e) const {
+    if (!disc_mirrors()) return k_motion_[e];
+    const double *v = &p_.v[3 * e], *w = &p_.omega[3 * e];
+    return {v[0], v[1], v[2], w[0], w[1], w[2]};
+  }
+  // The contact buffer's total on body i as a 3D force and torque.
+  KernelForce contact_load(std::size_t i) const {
+    if (!disc_mirrors()) return k_force_[i];
+    double f[6] = {0, 0, 0, 0, 0, 0};
+    const int n = plane_normal();
+    const DiscForce& d = k_disc_force_[i];
+    f[plane_u(n)] = d.fu, f[plane_v(n)] = d.fv, f[3 + n] = d.tn;
+    return {f[0], f[1], f[2], f[3], f[4], f[5]};
+  }
   // A wall-type contact's force (lane j: force and n x force) on the body of element e, with the
   // lever-arm torque in shaped mode.
   void add_wall_reaction(std::size_t e, const ContactLanes& L, std::size_t j) {
+    if (disc_mirrors()) {
+      const int n = plane_normal();
+      const double* f[3] = {L.fx, L.fy, L.fz};
+      const double* nf[3] = {L.nx, L.ny, L.nz};
+      DiscForce& fo = k_disc_force_[e];
+      fo.fu += f[plane_u(n)][j], fo.fv += f[plane_v(n)][j];
+      fo.tn -= nf[n][j] * L.ra[j];
+      return;
+    }
     const std::size_t body = shaped() ? static_cast<std::size_t>(e_body_[e]) : e;
     KernelForce& fo = k_force_[body];
     fo.fx += L.fx[j], fo.fy += L.fy[j], fo.fz += L.fz[j];
@@ -271,7 +301,7 @@ class DemSolver {
   bool kick_pending_ = false;           // step(true): the second half-kick waits in k_force_ (see step)
   std::vector<double> turn_;            // plane mode: each owned disc's turn about the normal since fold_turns
   double moved2_[2] = {0, 0};           // sphere bodies: squared largest displacements (see needs_rebuild)
-  bool owned_mirrors_current_ = false;  // k_geometry_/k_motion_ of owned bodies packed by integrate_first
+  bool owned_mirrors_current_ = false;  // the owned bodies' mirrors packed by integrate_first
   // Law coefficients: a table of the distinct sets (one per material pair for equal bodies) and,
   // per listed pair, an index into it: 4 bytes per pair to stream instead of 40.
   std::vector<ContactCoefficients> coefficient_sets_;
