@@ -57,6 +57,11 @@ def variations(case_text):
         ("Mo = 5000 N m/m", ["club.applied_moment_per_depth=5000"]),
         ("swing starts 10 mm above the bed (not 2)", ["club.start_clearance=0.01"]),
         ("club-sand friction 0.1 (not 0.2)", ["@friction:club,sand=0.1"]),
+        # Not open in the seed (Table 1 gives the ball's friction with sand, 0.2), but candidates for
+        # the release angle, which none of the above moves.
+        ("ball-sand friction 0.4 (not 0.2)", ["@friction:ball,sand=0.4"]),
+        ("club-ball friction 0.05 (not 0.2)", ["@friction:club,ball=0.05"]),
+        ("club sole camber 3 mm (not 1)", ["club.sole_camber=0.003"]),
     ]
 
 
