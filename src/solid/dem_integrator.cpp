@@ -13,22 +13,24 @@
 namespace tessera {
 
 void DemSolver::integrate_first() {
-  // External loads are a compile-time choice: scenes without them run the loop they always ran.
-  if (external_loads_) {
-    if (shaped())
-      integrate_first_impl<Bodies::shaped, true>();
-    else if (plane_mode())
-      integrate_first_impl<Bodies::discs, true>();
-    else
-      integrate_first_impl<Bodies::spheres, true>();
-  } else {
-    if (shaped())
-      integrate_first_impl<Bodies::shaped, false>();
-    else if (plane_mode())
-      integrate_first_impl<Bodies::discs, false>();
-    else
-      integrate_first_impl<Bodies::spheres, false>();
-  }
+  // External loads and the kind of body (a disc's normal too) are compile-time choices: scenes
+  // without loads run the loop they always ran, and a disc's axes are constants in its loop.
+  const Bodies kind = shaped()       ? Bodies::shaped
+                      : plane_mode() ? static_cast<Bodies>(static_cast<int>(Bodies::discs_x) + plane_normal())
+                                     : Bodies::spheres;
+  auto run = [&]<bool kExternal>() {
+    switch (kind) {
+      case Bodies::shaped: return integrate_first_impl<Bodies::shaped, kExternal>();
+      case Bodies::spheres: return integrate_first_impl<Bodies::spheres, kExternal>();
+      case Bodies::discs_x: return integrate_first_impl<Bodies::discs_x, kExternal>();
+      case Bodies::discs_y: return integrate_first_impl<Bodies::discs_y, kExternal>();
+      case Bodies::discs_z: return integrate_first_impl<Bodies::discs_z, kExternal>();
+    }
+  };
+  if (external_loads_)
+    run.template operator()<true>();
+  else
+    run.template operator()<false>();
 }
 
 void DemSolver::integrate_second() {
@@ -119,10 +121,10 @@ void DemSolver::integrate_first_impl() {
   // Discs (plane mode) turn about the normal only: the step adds dt w_n to their turn, which
   // fold_turns applies to q at the next rebuild or output (a 2D orientation is one angle).
   double* __restrict turn = turn_.data();
-  const int normal = std::max(0, plane_normal());
-  constexpr bool kDiscs = kBodies == Bodies::discs;
+  constexpr bool kDiscs = kBodies >= Bodies::discs_x;
+  constexpr int normal = kDiscs ? static_cast<int>(kBodies) - static_cast<int>(Bodies::discs_x) : 0;
+  constexpr int plane_a = plane_u(normal), plane_b = plane_v(normal);
   owned_mirrors_current_ = kDiscs ? k_disc_.size() >= n : kSpheres && k_geometry_.size() >= n && k_motion_.size() >= n;
-  const int plane_a = plane_u(normal), plane_b = plane_v(normal);
   const double* x0 = x_build_.data();
   const double* xm = x_moving_build_.data();
   double moved2 = 0, moved_since_walls2 = 0;
@@ -170,7 +172,7 @@ void DemSolver::integrate_first_impl() {
           k_motion_[i] = {vi[0], vi[1], vi[2], wi[0], wi[1], wi[2]};
         }
       }
-      if constexpr (kBodies == Bodies::discs)
+      if constexpr (kDiscs)
         turn[i] += dt * wi[normal];
       else
         turn_sphere(q + 4 * i, wi, h);

@@ -201,7 +201,7 @@ class DemSolver {
   template <class Law>
   void fill_pair_coefficients();
   void integrate_first();
-  enum class Bodies { shaped, spheres, discs };
+  enum class Bodies { shaped, spheres, discs_x, discs_y, discs_z };  // discs: by their plane's normal
   template <Bodies kBodies, bool kExternal>
   void integrate_first_impl();
   void integrate_second();
