@@ -26,7 +26,7 @@ DemScene::DemScene(const ConfigNode& root, MPI_Comm comm, const std::string& cas
       root.section("domain").fail("process_grid", std::string("1 along the plane's normal (") + "xyz"[n] + ")");
     domain.grid[n] = 1;
   }
-  decomp_ = std::make_unique<Decomposition>(comm, domain.lo, domain.hi, domain.grid);
+  decomp_ = std::make_unique<Decomposition>(comm, domain.lo, domain.hi, domain.grid, domain.cuts);
 
   ContactModel model(solid);
   Walls walls(solid, model, case_dir);

@@ -95,6 +95,7 @@ nlohmann::json SteppedScene::run(const RunOptions& opt, const nlohmann::json& re
   s["status"] = status_;
   s["ranks"] = decomp.size();
   s["process_grid"] = decomp.dims();
+  s["cuts"] = {decomp.cuts(0), decomp.cuts(1), decomp.cuts(2)};  // every sub-domain face, per direction
   s["steps"] = steps();
   s["steps_this_run"] = steps() - start_steps_;
   s["time"] = time();

@@ -14,6 +14,7 @@
 
 #include "app/signals.hpp"
 #include "core/config.hpp"
+#include "core/decomposition.hpp"
 #include "core/vec3.hpp"
 
 namespace tessera {
@@ -33,10 +34,13 @@ class Scene {
   virtual nlohmann::json run(const RunOptions& options, const nlohmann::json& resolved_case) = 0;
 };
 
-// The case's `domain` section: box_min, box_max (checked), process_grid (0 = the grid chooses).
+// The case's `domain` section: box_min, box_max (checked), process_grid (0 = the grid chooses),
+// cuts (optional: {x: [...], y: [...], z: [...]}, the interior cut planes along each direction,
+// which fix the grid there; docs/design.md).
 struct DomainSpec {
   Vec3 lo, hi;
   std::array<int, 3> grid{0, 0, 0};
+  Decomposition::Cuts cuts;
 };
 inline DomainSpec read_domain(const ConfigNode& root) {
   const ConfigNode domain = root.section("domain");
@@ -49,6 +53,9 @@ inline DomainSpec read_domain(const ConfigNode& root) {
     const auto g = domain.integers("process_grid", 3, 0, 1 << 20);
     s.grid = {int(g[0]), int(g[1]), int(g[2])};
   }
+  if (const auto cuts = domain.optional_section("cuts"))
+    for (int d = 0; d < 3; ++d)
+      if (cuts->has(std::string(1, "xyz"[d]))) s.cuts[d] = cuts->reals(std::string(1, "xyz"[d]), Dim::length);
   return s;
 }
 

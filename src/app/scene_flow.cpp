@@ -106,7 +106,7 @@ class FlowScene final : public SteppedScene {
  public:
   FlowScene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir, bool coupled) {
     const DomainSpec domain = read_domain(root);
-    decomp_ = std::make_unique<Decomposition>(comm, domain.lo, domain.hi, domain.grid);
+    decomp_ = std::make_unique<Decomposition>(comm, domain.lo, domain.hi, domain.grid, domain.cuts);
     flow_ = std::make_unique<FlowSolver>(*decomp_, FlowSettings::from_config(root.section("fluid")));
     if (coupled) bodies_ = std::make_unique<SceneBodies>(root, case_dir, *decomp_, *flow_);
 

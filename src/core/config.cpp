@@ -222,6 +222,25 @@ Vec3 ConfigNode::vec3(const std::string& key, Dim dim, const Vec3& fallback) con
   return vec3(key, dim);
 }
 
+std::vector<double> ConfigNode::reals(const std::string& key, Dim dim) const {
+  mark(key);
+  const std::string allowed = std::string("a list of numbers in ") + si_unit(dim);
+  if (!has(key)) throw InputError(key_path(key), "", "is required: " + allowed);
+  const YAML::Node n = child(key);
+  if (!n.IsSequence()) throw InputError(key_path(key), show(n), allowed);
+  std::vector<double> v;
+  for (const auto& item : n) {
+    const auto q = item.IsScalar() ? parse_quantity(item.Scalar(), dim) : std::nullopt;
+    if (!q || !std::isfinite(*q)) throw InputError(key_path(key), show(n), allowed);
+    v.push_back(*q);
+  }
+  YAML::Node o(YAML::NodeType::Sequence);
+  o.SetStyle(YAML::EmitterStyle::Flow);
+  for (double x : v) o.push_back(x);
+  out_[key] = o;
+  return v;
+}
+
 std::vector<long> ConfigNode::integers(const std::string& key, std::size_t count, long lo, long hi) const {
   mark(key);
   const std::string allowed =

@@ -59,6 +59,7 @@ class ConfigNode {
   Vec3 vec3(const std::string& key, Dim dim) const;
   Vec3 vec3(const std::string& key, Dim dim, const Vec3& fallback) const;
   std::vector<long> integers(const std::string& key, std::size_t count, long lo, long hi) const;
+  std::vector<double> reals(const std::string& key, Dim dim) const;  // a list of any length (may be empty)
   std::vector<std::string> texts(const std::string& key) const;
 
   ConfigNode section(const std::string& key) const;  // required mapping

@@ -29,10 +29,28 @@ std::array<int, 3> Decomposition::choose_dims(int size, const Vec3& extent, std:
   return best;
 }
 
-Decomposition::Decomposition(MPI_Comm comm, const Vec3& lo, const Vec3& hi, std::array<int, 3> requested)
+Decomposition::Decomposition(MPI_Comm comm, const Vec3& lo, const Vec3& hi, std::array<int, 3> requested,
+                             const Cuts& interior)
     : global_lo_(lo), global_hi_(hi) {
   int size = 1;
   MPI_Comm_size(comm, &size);
+  // Given cuts fix the grid along their direction.
+  for (int d = 0; d < 3; ++d) {
+    if (interior[d].empty()) continue;
+    const int n = static_cast<int>(interior[d].size()) + 1;
+    if (requested[d] && requested[d] != n)
+      throw InputError(std::string("domain.cuts.") + "xyz"[d], "",
+                       std::to_string(n - 1) + " cuts make " + std::to_string(n) + " sub-domains along " + "xyz"[d] +
+                           ", but domain.process_grid asks for " + std::to_string(requested[d]));
+    requested[d] = n;
+    for (std::size_t i = 0; i < interior[d].size(); ++i) {
+      const double c = interior[d][i], before = i ? interior[d][i - 1] : lo[d];
+      if (!(c > before) || !(c < hi[d]))
+        throw InputError(std::string("domain.cuts.") + "xyz"[d], std::to_string(c),
+                         "increasing cut planes strictly inside the box (" + std::to_string(lo[d]) + " to " +
+                             std::to_string(hi[d]) + ")");
+    }
+  }
   dims_ = choose_dims(size, hi - lo, requested);
   const int periods[3] = {0, 0, 0};
   // reorder = 0: rank numbering must not depend on the MPI library's placement choices.
@@ -43,8 +61,11 @@ Decomposition::Decomposition(MPI_Comm comm, const Vec3& lo, const Vec3& hi, std:
   for (int d = 0; d < 3; ++d) {
     MPI_Cart_shift(cart_, d, 1, &neighbors_[d][0], &neighbors_[d][1]);
     cuts_[d].resize(dims_[d] + 1);
-    for (int i = 0; i <= dims_[d]; ++i) cuts_[d][i] = lo[d] + (hi[d] - lo[d]) * static_cast<double>(i) / dims_[d];
-    cuts_[d][dims_[d]] = hi[d];
+    for (int i = 0; i <= dims_[d]; ++i)
+      cuts_[d][i] = i == 0 ? lo[d]
+                    : i == dims_[d] ? hi[d]
+                    : interior[d].empty() ? lo[d] + (hi[d] - lo[d]) * static_cast<double>(i) / dims_[d]
+                                          : interior[d][static_cast<std::size_t>(i - 1)];
   }
 }
 

@@ -15,8 +15,13 @@ namespace tessera {
 
 class Decomposition {
  public:
-  // requested[d] == 0 lets the grid choose that direction (least sub-domain surface).
-  Decomposition(MPI_Comm comm, const Vec3& lo, const Vec3& hi, std::array<int, 3> requested = {0, 0, 0});
+  // requested[d] == 0 lets the grid choose that direction (least sub-domain surface). Interior cut
+  // planes per direction (`interior[d]`: dims[d] - 1 increasing values strictly inside the box; empty:
+  // equal slabs) move the sub-domains' faces without changing the grid's topology: a rank's share
+  // of the work follows where its faces are, and results do not depend on them.
+  using Cuts = std::array<std::vector<double>, 3>;
+  Decomposition(MPI_Comm comm, const Vec3& lo, const Vec3& hi, std::array<int, 3> requested = {0, 0, 0},
+                const Cuts& interior = {});
   ~Decomposition();
   Decomposition(const Decomposition&) = delete;
   Decomposition& operator=(const Decomposition&) = delete;
