@@ -264,7 +264,11 @@ void DemSolver::pair_forces(Mirrors& view, double dt, bool update_history) {
   for (std::size_t i = shaped() ? n : (owned_mirrors_current_ ? p_.owned : 0); i < n; ++i) view.pack(i);
   // Pass 1, branch-free: which listed pairs touch (about half of them in a dense bed, at random,
   // which a branch would mispredict). The compacted list keeps the canonical order.
+  // Contacts that opened since the last evaluation lose their history (T3): a pair that touched then
+  // (was_touching_) and does not now. Rare, so the branch is predicted.
   touching_.resize(np);
+  was_touching_.resize(np, 0);
+  std::uint8_t* was = was_touching_.data();
   std::size_t nt = 0;
   // Prefetch distances: partners are scattered over ~1000 bodies, and a large bed's mirrors come
   // from memory. Pass 1 spends a few ns a pair, so it looks further ahead than pass 2.
@@ -272,19 +276,16 @@ void DemSolver::pair_forces(Mirrors& view, double dt, bool update_history) {
   for (std::size_t k = 0; k < np; ++k) {
     if (k + ahead1 < np) view.prefetch_geometry(second[k + ahead1]);
     touching_[nt] = static_cast<std::int32_t>(k);
-    nt += view.touching(first[k], second[k]) ? 1 : 0;
+    const bool touch = view.touching(first[k], second[k]);
+    nt += touch ? 1 : 0;
+    if (update_history) {
+      if (was[k] && !touch) hist[3 * k] = hist[3 * k + 1] = hist[3 * k + 2] = 0.0;
+      was[k] = touch ? 1 : 0;
+    }
   }
   touching_.resize(nt);
   if (shaped())
     for (const auto k : touching_) element_motion(first[k]), element_motion(second[k]);
-  // Contacts that opened since the last evaluation lose their history (T3).
-  if (update_history) {
-    auto it = touching_.begin();
-    for (const auto k : touching_before_) {
-      while (it != touching_.end() && *it < k) ++it;
-      if (it == touching_.end() || *it != k) hist[3 * k] = hist[3 * k + 1] = hist[3 * k + 2] = 0.0;
-    }
-  }
   // Pass 2, in blocks: gather the pairs' data into lanes, evaluate the law on all lanes
   // (vectorised, contact_kernel.cpp), then accumulate forces in canonical order.
   constexpr std::size_t B = ContactLanes::width;
@@ -314,7 +315,6 @@ void DemSolver::pair_forces(Mirrors& view, double dt, bool update_history) {
       view.accumulate(L, j, first[k], second[k]);
     }
   }
-  if (update_history) touching_before_.swap(touching_);
 }
 
 void DemSolver::compute_wall_forces(double dt) {

@@ -301,10 +301,10 @@ void DemSolver::rebuild() {
     } else {
       list_.build(p_, skin_, histories);
     }
-    touching_before_.clear();
+    was_touching_.resize(list_.size());
     for (std::size_t k = 0; k < list_.size(); ++k)
-      if (list_.history[3 * k] != 0.0 || list_.history[3 * k + 1] != 0.0 || list_.history[3 * k + 2] != 0.0)
-        touching_before_.push_back(static_cast<std::int32_t>(k));
+      was_touching_[k] =
+          list_.history[3 * k] != 0.0 || list_.history[3 * k + 1] != 0.0 || list_.history[3 * k + 2] != 0.0;
     x_build_.assign(p_.x.begin(), p_.x.begin() + 3 * static_cast<std::ptrdiff_t>(p_.owned));
     turn_.assign(plane_mode() ? p_.owned : 0, 0.0);
     inv_mass_.resize(p_.owned);

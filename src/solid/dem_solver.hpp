@@ -307,8 +307,10 @@ class DemSolver {
   std::vector<ContactCoefficients> coefficient_sets_;
   std::vector<std::int32_t> pair_coefficient_;
   ContactLanes lanes_;
-  // Listed pairs touching now and at the previous force evaluation (ascending list indices).
-  std::vector<std::int32_t> touching_, touching_before_;
+  // Listed pairs touching now (ascending list indices); per listed pair, whether it touched at the
+  // previous evaluation that advanced the histories.
+  std::vector<std::int32_t> touching_;
+  std::vector<std::uint8_t> was_touching_;
   std::vector<double> wall_entry_force_;  // 3 per wall entry: the body's force on the wall
   // Shaped mode.
   std::vector<ShapeTemplate> shapes_;
