@@ -8,7 +8,9 @@ scaling every mass and k_n together leaves the motion unchanged, so t x s is k_n
 tools/bunker_stiffness.py measures it). One entry of the seed's Table 3 is known (issue 20): loft
 58, bounce 10, depth 0 released the ball at 52.5 deg and 15.9 m/s.
 
-  tools/bunker_calibrate.py sensitivity [--case C] [--ensemble N] [--out D] [--ranks R]
+  tools/bunker_calibrate.py sensitivity [--case C] [--ensemble N] [--out D] [--ranks R] [--set K=V]
+      (docs/validation.md's table: --set club.applied_moment_per_depth=0, the free swing the study
+      started from; the cases now carry the calibrated Mo)
       the reference shot (loft 58, bounce 10, depth 0) with each open choice moved in turn
       (VARIATIONS below), N shots each (shot m m x 2 um deeper: one shot scatters by about 4 % in
       speed): each setting's mean release angle and speed +- their standard errors and the change
@@ -49,7 +51,7 @@ def variations(case_text):
     m, i = case_value(case_text, "mass_per_depth"), case_value(case_text, "moment_of_inertia_per_depth")
     club = lambda s: ["club.mass_per_depth=%g" % (s * m), "club.moment_of_inertia_per_depth=%g" % (s * i)]
     return [
-        ("case (mass %g kg/m, I %g kg m, Mo 0, clearance 2 mm)" % (m, i), []),
+        ("case (mass %g kg/m, I %g kg m, Mo as given, clearance 2 mm)" % (m, i), []),
         ("club mass and inertia x 0.5", club(0.5)),
         ("club mass and inertia x 2", club(2.0)),
         ("club mass and inertia x 4", club(4.0)),
@@ -95,7 +97,7 @@ def ensemble(args, case_path, sets, tag):
             cmd = ["mpirun", "-np", str(args.ranks), TESSERA, "run", case_path, "--output", out, "--quiet",
                    "--set", "bed.file=" + os.path.abspath(args.bed),
                    "--set", "club.shot_depth=%.9g" % (depth + k * args.perturbation)]
-            for s in sets + args.set:
+            for s in args.set + sets:  # the variation last: it wins
                 cmd += ["--set", s]
             with open(out + ".log", "w") as f:
                 if subprocess.run(cmd, cwd=ROOT, env=ENV, stdout=f, stderr=subprocess.STDOUT).returncode:
