@@ -104,7 +104,17 @@ CoupledStepStats CoupledSolver::step(double dt) {
     }
     solid_.correct_velocity(flow_, dem_, dt);
   }
+  if (budget_.started())
+    budget_.add_step(momentum_totals(flow_, solid_.fraction(), dem_), dt, flow_.settings().gravity, dem_.gravity(),
+                     flow_.last_wall_impulse(), dem_);
   return st;
+}
+
+void CoupledSolver::start_momentum_budget() {
+  if (settings_.fixed_bodies || !settings_.fluid_force)
+    throw InputError("coupling.bodies", settings_.fixed_bodies ? "fixed" : "moving",
+                     "the momentum budget needs moving bodies that feel the fluid (bodies: moving, fluid_force: true)");
+  budget_.start(momentum_totals(flow_, solid_.fraction(), dem_), dem_);
 }
 
 void CoupledSolver::average_held_loads() {

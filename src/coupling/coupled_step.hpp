@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "core/config.hpp"
+#include "coupling/momentum_budget.hpp"
 #include "coupling/pore_liquid.hpp"
 #include "coupling/solid_phase.hpp"
 
@@ -78,6 +79,11 @@ class CoupledSolver {
   // one step is not a steady body's force when dt changes: the velocity C4 leaves in a partly
   // covered cell scales with the step before (theory C4b).
   void average_held_loads();
+  // The momentum budget of fluid and bodies (C8), from now on, updated after every step (collective;
+  // a pass over the cells per step). Moving bodies with the fluid force only: held bodies' support
+  // and one-way coupling are outside it.
+  void start_momentum_budget();
+  const MomentumBudget& momentum_budget() const { return budget_; }
   PoreLiquid& mutable_liquid() { return liquid_; }
   FlowSolver& flow() { return flow_; }
   DemSolver& dem() { return dem_; }
@@ -93,6 +99,7 @@ class CoupledSolver {
   PhaseTimers timers_;
   std::vector<double> held_impulse_;  // fixed bodies: 6 per owned body, since average_held_loads
   double held_time_ = 0;
+  MomentumBudget budget_;
 };
 
 }  // namespace tessera

@@ -27,6 +27,16 @@ inline double van_leer(double a, double b) { return a * b > 0 ? 2 * a * b / (a +
 // half the liquid's viscosity over the gas's density (30 times the gas's nu for air and water).
 inline double face_viscosity(double a, double b) { return a + b > 0 ? 2 * a * b / (a + b) : 0.0; }
 
+// tau_qd / mu_f on the face between cells c - sd and c (F8): the derivative normal to the face
+// compact (doubled when q = d), the transposed one the mean of the two cells' central differences
+// (cross = 1 / (4 h_q); 0 when q = d).
+inline double face_strain(const double* uq, const double* ud, std::size_t c, std::ptrdiff_t sd, std::ptrdiff_t sq,
+                          double inv_h, double cross, bool normal) {
+  const double grad = (uq[c] - uq[c - sd]) * inv_h;
+  if (normal) return 2 * grad;
+  return grad + ((ud[c + sq] - ud[c - sq]) + (ud[c - sd + sq] - ud[c - sd - sq])) * cross;
+}
+
 // One phase throughout (no interface in the cells): there the limited slope is safe.
 inline bool one_phase(double a, double b, double c) {
   return (a <= kEmpty && b <= kEmpty && c <= kEmpty) || (a >= 1 - kFull && b >= 1 - kFull && c >= 1 - kFull);
@@ -219,6 +229,7 @@ FlowStepStats FlowSolver::advance(double dt) {
                              std::to_string(settings_.dt_min) + " s)");
   FlowStepStats st;
   st.dt = dt;
+  wall_impulse_ = {};
   advect(dt);
   if (settings_.liquid.viscosity > 0 || settings_.gas.viscosity > 0) {
     auto t = timers_.scope("viscous");
@@ -242,6 +253,7 @@ void FlowSolver::advect(double dt) {
   for (int d : order[parity_++ % 2])
     if (g.cells()[d] > 1 || g.periodic(d)) active.push_back(d);  // a one-cell slab between walls: no flow
   std::fill(dilatation_.begin(), dilatation_.end(), 0.0);
+  for (int q = 0; q < 3; ++q) std::copy(u_[q].begin(), u_[q].end(), work_[q].begin());  // F7's u at the step's start
   for (std::size_t n = 0; n < active.size(); ++n) sweep(active[n], dt, n + 1 == active.size());
   update_properties();
 }
@@ -306,7 +318,9 @@ void FlowSolver::sweep(int d, double dt, bool last) {
     const double f_new = f_old - (flux_f_[c + st] - flux_f_[c]) + cc * div;  // (F4)
     const double rho_old = rg + dr * f_old, rho_new = rg + dr * f_new, rho_cc = rg + dr * cc;
     for (int q = 0; q < 3; ++q) {
-      const double m = rho_old * u_[q][c] - (flux_q_[q][c + st] - flux_q_[q][c]) + rho_cc * u_[q][c] * div;
+      // The dilatation term with the velocity at the step's start (work_): the sweeps' terms then
+      // cancel as their div's do, and the advection moves momentum without making any (F7).
+      const double m = rho_old * u_[q][c] - (flux_q_[q][c + st] - flux_q_[q][c]) + rho_cc * work_[q][c] * div;
       u_[q][c] = m / rho_new;  // (F7)
     }
     f_[c] = f_new;
@@ -355,20 +369,30 @@ void FlowSolver::viscous(double dt) {
           const std::size_t row = g.at(0, j, k);
           for (int i = i0; i < i1; ++i) {
             const std::size_t c = row + i;
-            const double g_lo = (uq[c] - uq[c - sd]) * inv_h, g_hi = (uq[c + sd] - uq[c]) * inv_h;
-            double t_lo, t_hi;
-            if (q == d) {
-              t_lo = 2 * g_lo;
-              t_hi = 2 * g_hi;
-            } else {
-              const double centre = ud[c + sq] - ud[c - sq];
-              t_lo = g_lo + (centre + (ud[c - sd + sq] - ud[c - sd - sq])) * cross;
-              t_hi = g_hi + (centre + (ud[c + sd + sq] - ud[c + sd - sq])) * cross;
-            }
+            const double t_lo = face_strain(uq, ud, c, sd, sq, inv_h, cross, q == d);
+            const double t_hi = face_strain(uq, ud, c + sd, sd, sq, inv_h, cross, q == d);
             acc[c] += (mf[c + sd] * t_hi - mf[c] * t_lo) * inv_h;
           }
         }
     }
+    // The walls' share: the stress on the wall faces, times their area and dt (the momentum budget).
+    for (int d = 0; d < 3; ++d)
+      for (int side = 0; side < 2; ++side) {
+        if (!g.at_domain_edge(d, side) || g.boundary(d, side) == BoundaryKind::outflow) continue;
+        std::array<int, 3> lo{g.begin(0), g.begin(1), g.begin(2)}, hi{g.end(0), g.end(1), g.end(2)};
+        lo[d] = side == 0 ? 0 : g.cells()[d] - 1;
+        hi[d] = lo[d] + 1;
+        const std::ptrdiff_t sd = g.stride(d), sq = g.stride(q);
+        const double inv_h = 1 / h[d], cross = q == d ? 0.0 : 1 / (4 * h[q]), area = h[0] * h[1] * h[2] * inv_h;
+        const double* uq = u_[q].data();
+        const double* ud = u_[d].data();
+        const double* mf = mu_face[d].data();
+        for_box(lo, hi, [&](int i, int j, int k) {
+          const std::size_t c = g.at(i, j, k), face = side == 0 ? c : c + sd;
+          const double stress = mf[face] * face_strain(uq, ud, face, sd, sq, inv_h, cross, q == d);
+          wall_impulse_[q] += (side == 0 ? -stress : stress) * area * dt;
+        });
+      }
     if (!stress_div_[q].empty()) std::copy(work_[q].begin(), work_[q].end(), stress_div_[q].begin());
     const double* uq = u_[q].data();
     const double* rho = rho_.data();
@@ -438,8 +462,13 @@ void FlowSolver::wall_model_stress(double dt) {
         const double mu = mu_[c], rho = rho_[c];
         const double factor = spalding_stress_factor(std::sqrt(speed2), y, mu / rho);
         const double laminar = dt * 2 * mu / (rho * h * h);
+        const double mass = rho * g.h(0) * g.h(1) * g.h(2);
         for (int q = 0; q < 3; ++q)
-          if (q != d) work_[q][c] = (work_[q][c] + laminar * u_[q][c]) / (1 + laminar * factor);
+          if (q != d) {
+            const double before = work_[q][c];
+            work_[q][c] = (work_[q][c] + laminar * u_[q][c]) / (1 + laminar * factor);
+            wall_impulse_[q] += mass * (work_[q][c] - before);  // the law's stress in place of F8's
+          }
       });
     }
 }
@@ -557,6 +586,7 @@ PoissonStats FlowSolver::project(double dt, bool with_gravity) {
       uf[c] -= dt * (grad / rho_fe);
     });
   }
+  if (with_gravity) wall_pressure_impulse(dt);
   for (int d = 0; d < 3; ++d) {
     const std::ptrdiff_t st = g.stride(d);
     for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)}, [&](int i, int j, int k) {
@@ -572,6 +602,33 @@ PoissonStats FlowSolver::project(double dt, bool with_gravity) {
   g.exchange({&u_[0], &u_[1], &u_[2]});
   fill_velocity_ghosts(u_);
   return ps;
+}
+
+void FlowSolver::wall_pressure_impulse(double dt) {
+  // A wall face has a_f = 0: the pressure's gradient there balances gravity, so the pressure on the
+  // wall is the wall cell's extrapolated half a cell along it, p_c -+ rho_c g_d h_d / 2 (F10). With
+  // these values, the projection's momentum change of a fluid of one density is exactly gravity's
+  // plus the walls' (interior faces cancel in the sum of the cells' mean face accelerations).
+  const FluidGrid& g = *grid_;
+  for (int d = 0; d < 3; ++d)
+    for (int side = 0; side < 2; ++side) {
+      if (!g.at_domain_edge(d, side) || g.boundary(d, side) == BoundaryKind::outflow) continue;
+      std::array<int, 3> lo{g.begin(0), g.begin(1), g.begin(2)}, hi{g.end(0), g.end(1), g.end(2)};
+      lo[d] = side == 0 ? 0 : g.cells()[d] - 1;
+      hi[d] = lo[d] + 1;
+      const double h = g.h(d), area = g.h(0) * g.h(1) * g.h(2) / h, gd = settings_.gravity[d];
+      for_box(lo, hi, [&](int i, int j, int k) {
+        const std::size_t c = g.at(i, j, k);
+        const double wall = side == 0 ? p_[c] - 0.5 * rho_[c] * gd * h : p_[c] + 0.5 * rho_[c] * gd * h;
+        wall_impulse_[d] += (side == 0 ? wall : -wall) * area * dt;
+      });
+    }
+}
+
+Vec3 FlowSolver::last_wall_impulse() const {
+  std::array<ExactSum, 3> sums = wall_impulse_;
+  ExactSum::all_reduce(sums, grid_->comm());
+  return {sums[0].value(), sums[1].value(), sums[2].value()};
 }
 
 Vec3 FlowSolver::pressure_force(int i, int j, int k) const {

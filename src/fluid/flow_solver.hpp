@@ -40,6 +40,7 @@
 
 #include "core/config.hpp"
 #include "core/decomposition.hpp"
+#include "core/exact_sum.hpp"
 #include "core/timers.hpp"
 #include "fluid/fluid_grid.hpp"
 #include "fluid/pressure_poisson.hpp"
@@ -130,6 +131,11 @@ class FlowSolver {
   // d (m^3/s, negative where the flow comes in), from the projected face velocities, summed exactly
   // (the same bits on any rank count). 0 on a wall; not defined on a periodic side (0).
   double boundary_flux(int d, int side) const;
+  // Collective: the momentum the domain's walls gave the fluid in the last step (N s), summed
+  // exactly: the viscous stress on the wall faces (F8, or the wall law F8a) and the pressure on them,
+  // the wall cell's extrapolated half a cell by the hydrostatic gradient its zero face acceleration
+  // means (F10). Not counted: outflow sides (their momentum flux), periodic ones (none).
+  Vec3 last_wall_impulse() const;
   double min_fraction() const;
   double max_fraction() const;
 
@@ -190,6 +196,7 @@ class FlowSolver {
   void viscous(double dt);                  // u <- u + dt div(tau) / rho
   void wall_model_stress(double dt);        // the wall law on no-slip walls (after viscous)
   PoissonStats project(double dt, bool with_gravity);
+  void wall_pressure_impulse(double dt);    // the walls' pressure impulse of the projection
 
   FlowSettings settings_;
   std::unique_ptr<FluidGrid> grid_;
@@ -206,6 +213,7 @@ class FlowSolver {
   double g2_ = 0, h_max_ = 0;
   int down_axis_ = 2;  // gravity's main direction  // rho (1 + lambda dt): the projection's, with a cell drag
   std::array<std::vector<double>, 3> flux_q_;
+  std::array<ExactSum, 3> wall_impulse_;  // this rank's wall faces, the current step
   PhaseTimers timers_;
   double time_ = 0;
   long steps_ = 0;

@@ -228,6 +228,22 @@ std::vector<Vec3> DemSolver::wall_forces() const {
   return f;
 }
 
+void DemSolver::track_wall_impulse(bool on) {
+  track_wall_impulse_ = on;
+  wall_impulse_ = {};
+}
+
+void DemSolver::add_wall_half_impulse() {
+  for (std::size_t k = 0; 3 * k + 2 < wall_entry_force_.size(); ++k)
+    for (int d = 0; d < 3; ++d) wall_impulse_[d] += -0.5 * dt_ * wall_entry_force_[3 * k + d];
+}
+
+Vec3 DemSolver::wall_impulse() const {
+  std::array<ExactSum, 3> sums = wall_impulse_;
+  ExactSum::all_reduce(sums, decomp_.comm());
+  return {sums[0].value(), sums[1].value(), sums[2].value()};
+}
+
 HistoryMap DemSolver::histories() const {
   HistoryMap h;
   list_.collect(h);
@@ -485,6 +501,7 @@ void DemSolver::find_moving_candidates() {
 }
 
 void DemSolver::step(bool defer_kick) {
+  if (track_wall_impulse_) add_wall_half_impulse();  // the first half-kick's wall forces
   {
     auto t = timers_.scope("integrate");
     integrate_first();
@@ -506,6 +523,7 @@ void DemSolver::step(bool defer_kick) {
     if (refresh_moving_) refresh_moving_candidates();
   }
   compute_forces(true);
+  if (track_wall_impulse_) add_wall_half_impulse();  // the second's
   {
     auto t = timers_.scope("integrate");
     if (defer_kick && !shaped())

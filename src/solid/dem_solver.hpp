@@ -29,6 +29,7 @@
 
 #include "core/config.hpp"
 #include "core/decomposition.hpp"
+#include "core/exact_sum.hpp"
 #include "core/timers.hpp"
 #include "solid/contact_history.hpp"
 #include "solid/contact_kernel.hpp"
@@ -160,6 +161,11 @@ class DemSolver {
   // Collective: total force of all bodies on each wall primitive at the last force evaluation,
   // summed exactly (the same bits on any rank count).
   std::vector<Vec3> wall_forces() const;
+  // The impulse the planar walls gave the owned bodies over the steps since track_wall_impulse(true)
+  // (N s; collective, summed exactly): per step dt/2 (F_n + F_n+1), as the integrator's two
+  // half-kicks apply the wall forces. Free spheres and mesh walls are not counted.
+  void track_wall_impulse(bool on);
+  Vec3 wall_impulse() const;
   // Contact histories of touching pairs (this rank's list; pairs with an owned body).
   HistoryMap histories() const;
   std::size_t list_builds() const { return list_.builds; }
@@ -311,6 +317,9 @@ class DemSolver {
   // previous evaluation that advanced the histories.
   std::vector<std::int32_t> touching_;
   std::vector<std::uint8_t> was_touching_;
+  void add_wall_half_impulse();  // dt/2 times the walls' push on the owned bodies now
+  bool track_wall_impulse_ = false;
+  std::array<ExactSum, 3> wall_impulse_;
   std::vector<double> wall_entry_force_;  // 3 per wall entry: the body's force on the wall
   // Shaped mode.
   std::vector<ShapeTemplate> shapes_;

@@ -498,3 +498,68 @@ TEST(Coupled, SameMotionOnEveryRankCount) {
 
 }  // namespace
 }  // namespace tessera::test
+
+namespace tessera::test {
+namespace {
+
+// A grain released at rest at height z_release in a closed box of water up to z_surface (air above),
+// run until it has settled on the floor; the momentum budget (theory C8) after every step.
+struct BudgetRun {
+  double worst = 0;          // largest |residual| over the steps (kg m/s)
+  double peak_momentum = 0;  // the grain's largest |M v|
+  double floor_impulse = 0;  // the floor's contact impulse on the grain (z)
+  double fluid_gravity = 0;  // |m_fluid g| t at the end: the scale the walls' pressure balances
+  Vec3 end;                  // the residual at the end
+  double lowest = 1;         // the grain's lowest centre height (m)
+};
+
+BudgetRun falling_grain(MPI_Comm comm, double z_surface, double z_release, int cells, double dt, int steps) {
+  DemSettings s;
+  s.gravity = {0, 0, -9.81};
+  Walls walls;
+  walls.add_box_inside({0, 0, 0}, {kBox, kBox, kBox}, 0);
+  DemRig rig(comm, {0, 0, 0}, {kBox, kBox, kBox}, sand_model(2650), walls, s);
+  rig.dem->set_shapes({grain()});
+  rig.dem->add_body(0, 0, 1, {4e-3 + 1e-5, 4e-3 - 2e-5, z_release}, turn(3), {});
+  rig.dem->setup();
+  FlowSolver flow(*rig.decomp, water_and_air(cells));
+  const FluidGrid& g = flow.grid();
+  flow.initialize([&](int, int, int k) { return FlowSolver::CellState{below(g, k, z_surface), {}}; });
+  CoupledSolver cpl(flow, *rig.dem, CouplingSettings{});
+  cpl.start();
+  cpl.start_momentum_budget();
+  BudgetRun out;
+  for (int n = 0; n < steps; ++n) {
+    cpl.step(dt);
+    const MomentumBudget& b = cpl.momentum_budget();
+    const Vec3 r = b.residual();
+    out.worst = std::max(out.worst, norm(r));
+    out.peak_momentum = std::max(out.peak_momentum, norm(b.now().bodies));
+    const auto& p = rig.dem->particles();
+    double z = p.owned == 1 ? p.x[2] : 1.0;
+    MPI_Allreduce(MPI_IN_PLACE, &z, 1, MPI_DOUBLE, MPI_MIN, comm);
+    out.lowest = std::min(out.lowest, z);
+    if (root() && n % 50 == 0)
+      std::printf("    step %3d z %.3e P_bodies %+.3e P_fluid %+.3e gravity %+.3e walls %+.3e/%+.3e residual (%+.2e %+.2e %+.2e)\n", n, z,
+                  b.now().bodies.z, b.now().fluid.z, b.gravity_impulse().z, b.fluid_wall_impulse().z,
+                  b.body_wall_impulse().z, r.x, r.y, r.z);
+  }
+  const MomentumBudget& b = cpl.momentum_budget();
+  out.end = b.residual();
+  out.floor_impulse = b.body_wall_impulse().z;
+  out.fluid_gravity = std::abs(b.gravity_impulse().z);
+  return out;
+}
+
+TEST(MomentumBudget, GrainFallingIntoWaterInAClosedBox) {
+  for (int cells : {16, 32})
+  for (double surface : {9e-3, 4e-3}) {  // water throughout; air above 4 mm
+    const BudgetRun r = falling_grain(MPI_COMM_WORLD, surface, 6e-3, cells, 2e-4, 500);
+    if (root())
+      std::printf("  surface %.0f mm: worst residual %.3e, end (%.2e %.2e %.2e), grain's peak momentum %.3e, floor impulse %.3e, gravity %.3e, lowest %.3e\n",
+                  surface * 1e3, r.worst, r.end.x, r.end.y, r.end.z, r.peak_momentum, r.floor_impulse, r.fluid_gravity, r.lowest);
+  }
+}
+
+}  // namespace
+}  // namespace tessera::test
