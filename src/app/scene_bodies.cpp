@@ -132,6 +132,7 @@ std::optional<DropShape> SceneBodies::start(const std::optional<std::string>& re
 
 void SceneBodies::begin(const std::optional<std::string>& restart, const std::string& dir) {
   coupled_->start(!restart);  // a restart's velocities were corrected when saved
+  if (coupling_.momentum_budget) coupled_->start_momentum_budget();  // from the start or the restart
   if (coupled_->liquid_in_pores()) free_liquid0_ = free_liquid_volume();
   output_dir_ = dir;
   bodies_out_ = std::make_unique<SnapshotSeries>(dir + "/snapshots");
@@ -313,6 +314,21 @@ void SceneBodies::summarise(nlohmann::json& s, long steps_run, double volume, co
     const double nu = flow_.settings().liquid.viscosity / flow_.settings().liquid.density;
     const double h = std::min({g.h(0), g.h(1), g.h(2)});
     s["coupling"]["leak_number"] = {step_range_[0] * nu / (h * h), step_range_[1] * nu / (h * h)};
+  }
+  if (coupled_->momentum_budget().started()) {  // C8: what gravity and the walls gave, what each stage left
+    const MomentumBudget& mb = coupled_->momentum_budget();
+    auto vec = [](const Vec3& v) { return nlohmann::json::array({v.x, v.y, v.z}); };
+    nlohmann::json stages;
+    for (int k = 0; k < MomentumBudget::stages; ++k)
+      stages[MomentumBudget::name(MomentumBudget::Stage(k))] = vec(mb.stage_residual(MomentumBudget::Stage(k)));
+    s["coupling"]["momentum_budget"] = {{"momentum_start", vec(mb.start_totals().fluid + mb.start_totals().bodies)},
+                                        {"momentum_end", vec(mb.now().fluid + mb.now().bodies)},
+                                        {"body_momentum_end", vec(mb.now().bodies)},
+                                        {"gravity_impulse", vec(mb.gravity_impulse())},
+                                        {"fluid_wall_impulse", vec(mb.fluid_wall_impulse())},
+                                        {"body_wall_impulse", vec(mb.body_wall_impulse())},
+                                        {"residual", vec(mb.residual())},
+                                        {"stage_residuals", stages}};
   }
   if (rest_.enabled()) rest_.report(q, flow_.time());
   if (drop_) drop_->report(q);

@@ -15,6 +15,10 @@ CouplingSettings CouplingSettings::from_config(const ConfigNode& c) {
   s.fluid_force = c.flag("fluid_force", true);
   s.liquid_in_pores = c.flag("liquid_in_pores", true);
   s.fixed_bodies = c.choice("bodies", {"moving", "fixed"}, "moving") == "fixed";
+  s.momentum_budget = c.flag("momentum_budget", false);
+  if (s.momentum_budget && (s.fixed_bodies || !s.fluid_force))
+    throw InputError("coupling.momentum_budget", "true",
+                     "the budget needs moving bodies that feel the fluid (bodies: moving, fluid_force: true)");
   s.layout_tolerance = c.real("layout_tolerance", Dim::none, Range::closed(0, 0.25), s.layout_tolerance);
   s.partial.per_step = c.choice("partial_cells", {"step", "rate"}, "step") == "step";
   s.partial.rate = c.real("partial_cell_rate", Dim::none, Range::positive(), s.partial.rate);
@@ -75,10 +79,14 @@ CoupledStepStats CoupledSolver::step(double dt) {
     auto t = timers_.scope("dem_substeps");
     dem_.advance(st.dem_dt, st.substeps);
   }
+  const bool budget = budget_.started();
+  if (budget)
+    budget_.after_flow(totals(), dt, flow_.settings().gravity, dem_.gravity(), flow_.last_wall_impulse(), dem_);
   {
     auto t = timers_.scope("solid_fraction");
     solid_.update(dem_);
   }
+  if (budget) budget_.after(MomentumBudget::layout, totals());
   if (settings_.liquid_in_pores) {
     auto t = timers_.scope("pore_liquid");
     liquid_.displace(solid_.moves(), dem_.particles().size(), [&](std::vector<double>& sums) {
@@ -87,6 +95,7 @@ CoupledStepStats CoupledSolver::step(double dt) {
     });
     st.liquid = liquid_.settle(flow_, solid_.fraction());
   }
+  if (budget) budget_.after(MomentumBudget::pore_liquid, totals());
   {
     auto t = timers_.scope("correction");
     if (settings_.fixed_bodies) {
@@ -104,18 +113,18 @@ CoupledStepStats CoupledSolver::step(double dt) {
     }
     solid_.correct_velocity(flow_, dem_, dt);
   }
-  if (budget_.started())
-    budget_.add_step(momentum_totals(flow_, solid_.fraction(), dem_), dt, flow_.settings().gravity, dem_.gravity(),
-                     flow_.last_wall_impulse(), dem_);
+  if (budget) budget_.after(MomentumBudget::correction, totals());
   return st;
 }
 
 void CoupledSolver::start_momentum_budget() {
   if (settings_.fixed_bodies || !settings_.fluid_force)
-    throw InputError("coupling.bodies", settings_.fixed_bodies ? "fixed" : "moving",
-                     "the momentum budget needs moving bodies that feel the fluid (bodies: moving, fluid_force: true)");
-  budget_.start(momentum_totals(flow_, solid_.fraction(), dem_), dem_);
+    throw InputError("coupling.momentum_budget", "true",
+                     "the budget needs moving bodies that feel the fluid (bodies: moving, fluid_force: true)");
+  budget_.start(totals(), dem_);
 }
+
+MomentumTotals CoupledSolver::totals() const { return momentum_totals(flow_, solid_.fraction(), dem_); }
 
 void CoupledSolver::average_held_loads() {
   if (!settings_.fixed_bodies || held_time_ == 0) return;

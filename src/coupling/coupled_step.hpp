@@ -44,6 +44,9 @@ struct CouplingSettings {
   // or `rate` (dragged towards the solid's velocity at the rate `partial_cell_rate` nu alpha /
   // ((1 - alpha) h^2), implicit in the projection: the same on any step). Theory C4c.
   PartialCells partial;
+  // `momentum_budget: true`: the scene keeps the momentum budget of fluid and bodies (C8) from its
+  // start (or restart) and reports it in summary.json (three more passes over the cells per step).
+  bool momentum_budget = false;
   static CouplingSettings from_config(const ConfigNode& coupling);
 };
 
@@ -79,9 +82,9 @@ class CoupledSolver {
   // one step is not a steady body's force when dt changes: the velocity C4 leaves in a partly
   // covered cell scales with the step before (theory C4b).
   void average_held_loads();
-  // The momentum budget of fluid and bodies (C8), from now on, updated after every step (collective;
-  // a pass over the cells per step). Moving bodies with the fluid force only: held bodies' support
-  // and one-way coupling are outside it.
+  // The momentum budget of fluid and bodies (C8), from now on, updated at three stages of every
+  // step (collective; three passes over the cells per step, so off unless asked for). Moving bodies
+  // with the fluid force only: held bodies' support and one-way coupling are outside it.
   void start_momentum_budget();
   const MomentumBudget& momentum_budget() const { return budget_; }
   PoreLiquid& mutable_liquid() { return liquid_; }
@@ -90,6 +93,7 @@ class CoupledSolver {
   PhaseTimers& timers() { return timers_; }
 
  private:
+  MomentumTotals totals() const;  // collective (the budget's)
   FlowSolver& flow_;
   DemSolver& dem_;
   CouplingSettings settings_;

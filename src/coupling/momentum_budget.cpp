@@ -36,26 +36,39 @@ MomentumTotals momentum_totals(const FlowSolver& flow, const std::vector<double>
   return t;
 }
 
+const char* MomentumBudget::name(Stage s) {
+  switch (s) {
+    case flow_and_bodies: return "flow_and_bodies";
+    case layout: return "layout";
+    case pore_liquid: return "pore_liquid";
+    case correction: return "correction";
+    default: return "?";
+  }
+}
+
 void MomentumBudget::start(const MomentumTotals& now, DemSolver& dem) {
   started_ = true;
   start_ = now_ = now;
   gravity_ = fluid_walls_ = body_walls_ = Vec3{};
+  for (Vec3& r : stage_) r = Vec3{};
   dem.track_wall_impulse(true);
 }
 
-void MomentumBudget::add_step(const MomentumTotals& now, double dt, const Vec3& fluid_gravity, const Vec3& body_gravity,
-                              const Vec3& fluid_wall_impulse, const DemSolver& dem) {
-  // The fluid outside the bodies changes its mass as the bodies move (and its density as the
-  // liquid does): the mean of the step's two ends.
-  gravity_ += (0.5 * (now_.fluid_mass + now.fluid_mass) * dt) * fluid_gravity +
-              (0.5 * (now_.body_mass + now.body_mass) * dt) * body_gravity;
+void MomentumBudget::after_flow(const MomentumTotals& now, double dt, const Vec3& fluid_gravity, const Vec3& body_gravity,
+                                const Vec3& fluid_wall_impulse, const DemSolver& dem) {
+  const Vec3 gravity = (now_.fluid_mass * dt) * fluid_gravity + (now_.body_mass * dt) * body_gravity;
+  const Vec3 body_walls = dem.wall_impulse();
+  stage_[flow_and_bodies] += (now.fluid + now.bodies) - (now_.fluid + now_.bodies) - gravity - fluid_wall_impulse -
+                             (body_walls - body_walls_);
+  gravity_ += gravity;
   fluid_walls_ += fluid_wall_impulse;
-  body_walls_ = dem.wall_impulse();
+  body_walls_ = body_walls;
   now_ = now;
 }
 
-Vec3 MomentumBudget::residual() const {
-  return (now_.fluid + now_.bodies) - (start_.fluid + start_.bodies) - gravity_ - fluid_walls_ - body_walls_;
+void MomentumBudget::after(Stage stage, const MomentumTotals& now) {
+  stage_[stage] += (now.fluid + now.bodies) - (now_.fluid + now_.bodies);
+  now_ = now;
 }
 
 }  // namespace tessera

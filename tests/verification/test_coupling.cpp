@@ -503,14 +503,16 @@ namespace tessera::test {
 namespace {
 
 // A grain released at rest at height z_release in a closed box of water up to z_surface (air above),
-// run until it has settled on the floor; the momentum budget (theory C8) after every step.
+// run until it rests on the floor; the momentum budget (theory C8) after every step.
 struct BudgetRun {
+  double scale = 0;          // the largest impulse (gravity's on fluid and grain, the walls')
   double worst = 0;          // largest |residual| over the steps (kg m/s)
+  double worst_correction = 0;  // largest |residual of the correction stage| (C4a, C4)
   double peak_momentum = 0;  // the grain's largest |M v|
-  double floor_impulse = 0;  // the floor's contact impulse on the grain (z)
-  double fluid_gravity = 0;  // |m_fluid g| t at the end: the scale the walls' pressure balances
-  Vec3 end;                  // the residual at the end
-  double lowest = 1;         // the grain's lowest centre height (m)
+  Vec3 stage[MomentumBudget::stages];
+  double floor_force = 0;    // the floor's mean push on the grain over the last 50 steps (N)
+  double rest_speed = 0;     // the grain's speed at the end
+  double weight = 0, buoyancy = 0;  // M g, rho_w g V
 };
 
 BudgetRun falling_grain(MPI_Comm comm, double z_surface, double z_release, int cells, double dt, int steps) {
@@ -529,35 +531,59 @@ BudgetRun falling_grain(MPI_Comm comm, double z_surface, double z_release, int c
   cpl.start();
   cpl.start_momentum_budget();
   BudgetRun out;
+  double floor_before = 0;
   for (int n = 0; n < steps; ++n) {
+    if (n == steps - 50) floor_before = cpl.momentum_budget().body_wall_impulse().z;
     cpl.step(dt);
     const MomentumBudget& b = cpl.momentum_budget();
-    const Vec3 r = b.residual();
-    out.worst = std::max(out.worst, norm(r));
+    out.scale = std::max({out.scale, norm(b.gravity_impulse()), norm(b.fluid_wall_impulse())});
+    out.worst = std::max(out.worst, norm(b.residual()));
+    out.worst_correction = std::max(out.worst_correction, norm(b.stage_residual(MomentumBudget::correction)));
     out.peak_momentum = std::max(out.peak_momentum, norm(b.now().bodies));
-    const auto& p = rig.dem->particles();
-    double z = p.owned == 1 ? p.x[2] : 1.0;
-    MPI_Allreduce(MPI_IN_PLACE, &z, 1, MPI_DOUBLE, MPI_MIN, comm);
-    out.lowest = std::min(out.lowest, z);
-    if (root() && n % 50 == 0)
-      std::printf("    step %3d z %.3e P_bodies %+.3e P_fluid %+.3e gravity %+.3e walls %+.3e/%+.3e residual (%+.2e %+.2e %+.2e)\n", n, z,
-                  b.now().bodies.z, b.now().fluid.z, b.gravity_impulse().z, b.fluid_wall_impulse().z,
-                  b.body_wall_impulse().z, r.x, r.y, r.z);
   }
   const MomentumBudget& b = cpl.momentum_budget();
-  out.end = b.residual();
-  out.floor_impulse = b.body_wall_impulse().z;
-  out.fluid_gravity = std::abs(b.gravity_impulse().z);
+  for (int k = 0; k < MomentumBudget::stages; ++k) out.stage[k] = b.stage_residual(MomentumBudget::Stage(k));
+  out.floor_force = (b.body_wall_impulse().z - floor_before) / (50 * dt);
+  const double mass = b.now().body_mass;
+  out.rest_speed = norm(b.now().bodies) / mass;
+  out.weight = mass * 9.81;
+  out.buoyancy = 1000 * 9.81 * rig.dem->shapes()[0].volume;
   return out;
 }
 
 TEST(MomentumBudget, GrainFallingIntoWaterInAClosedBox) {
-  for (int cells : {16, 32})
-  for (double surface : {9e-3, 4e-3}) {  // water throughout; air above 4 mm
-    const BudgetRun r = falling_grain(MPI_COMM_WORLD, surface, 6e-3, cells, 2e-4, 500);
-    if (root())
-      std::printf("  surface %.0f mm: worst residual %.3e, end (%.2e %.2e %.2e), grain's peak momentum %.3e, floor impulse %.3e, gravity %.3e, lowest %.3e\n",
-                  surface * 1e3, r.worst, r.end.x, r.end.y, r.end.z, r.peak_momentum, r.floor_impulse, r.fluid_gravity, r.lowest);
+  // A sand grain falls 5.5 mm to the floor through water (surface above the box) or through 2 mm
+  // of air first (surface at 4 mm), 16^3 cells, 700 steps of 0.2 ms: it lands at about 60-90 ms and
+  // comes to rest. Gravity and the walls (the flow's, and the floor's contact on the grain) are the
+  // only outside impulses (theory C8).
+  //  - Exact, bounded at round-off (1e-6 of the grain's peak momentum over 700 steps of 6 x 6
+  //    solves): the correction stage, C4a's exchange and C4 (the fluid gets what the body loses).
+  //    The flow's own budget is exact in one fluid (test_flow, MomentumBudget).
+  //  - Not conserved, measured (docs/validation.md): MICS's virtual fluid inside the bodies. The flow
+  //    step's advection moves momentum into and out of a body's cells that C3 does not give the body
+  //    (stage flow_and_bodies), and a body laid out at its new pose takes cells, with their fluid's
+  //    momentum, from the fluid outside it and gives others back (stage layout). Both vanish with
+  //    no-slip at the surface and scale with the slip in the partly covered cells; here 14 % of the
+  //    grain's peak momentum in water (a guard, not a verification: 0.3). With the interface the
+  //    flow's own two-phase residual (F10) adds to it (43 %, reported). The pore liquid's stage (C7)
+  //    moves the density where the grain pokes through the floor (1e-10, reported).
+  for (double surface : {9e-3, 4e-3}) {
+    const BudgetRun r = falling_grain(MPI_COMM_WORLD, surface, 6e-3, 16, 2e-4, 700);
+    if (root()) {
+      std::printf("  surface %.0f mm: residual up to %.3e kg m/s (%.3f of the grain's peak momentum %.3e; impulses up to %.3e)\n",
+                  surface * 1e3, r.worst, r.worst / r.peak_momentum, r.peak_momentum, r.scale);
+      for (int k = 0; k < MomentumBudget::stages; ++k)
+        std::printf("    stage %-16s (%+.3e %+.3e %+.3e)\n", MomentumBudget::name(MomentumBudget::Stage(k)), r.stage[k].x,
+                    r.stage[k].y, r.stage[k].z);
+      std::printf("    correction stage up to %.3e; at the end %.2e m/s, the floor's push over the last 50 steps %.4e N (M g - rho g V = %.4e N)\n",
+                  r.worst_correction, r.rest_speed, r.floor_force, r.weight - r.buoyancy);
+    }
+    EXPECT_LT(r.rest_speed, 1e-3) << "the grain must have landed and come to rest";
+    EXPECT_GT(r.floor_force, 0.5 * (r.weight - r.buoyancy)) << "the floor must carry the grain";
+    EXPECT_LT(r.worst_correction, 1e-6 * r.peak_momentum);
+    if (surface > kBox) {
+      EXPECT_LT(r.worst, 0.3 * r.peak_momentum);
+    }
   }
 }
 
