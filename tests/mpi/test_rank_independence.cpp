@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Results do not depend on the rank count or the process grid: the same violent deposition on
-// 1, 2 and 4 ranks, split along x, z and in two directions, ends in bitwise identical states
+// 1, 2 and 4 ranks, split along x, z and in two directions, in equal slabs or at uneven cut planes
+// (domain.cuts), ends in bitwise identical states
 // (positions, velocities, angular velocities, orientations, forces, wall histories).
 // Each multi-rank run must have split the work (bodies migrated, contacts crossed rank boundaries)
 // and the bodies must have moved, or the comparison would prove nothing.
@@ -47,19 +48,24 @@ TEST(RankIndependence, ViolentDepositionIsBitwiseIdenticalOn1To4Ranks) {
   struct Grid {
     int ranks;
     const char* grid;
+    const char* cuts = "";  // uneven cut planes (domain.cuts.x, and y at 2.2 mm), or equal slabs
   };
   long cross = 0;
-  for (const Grid g :
-       {Grid{2, "[2,1,1]"}, Grid{2, "[1,1,2]"}, Grid{4, "[2,2,1]"}, Grid{4, "[1,1,4]"}, Grid{4, "[4,1,1]"}}) {
-    const BodyStates got =
-        run_scene_on(g.ranks, kViolentDeposition,
-                     {"run.max_steps=3000", "run.check_interval=5e-5", std::string("domain.process_grid=") + g.grid},
-                     dir + "/" + std::to_string(g.ranks) + g.grid);
+  for (const Grid g : {Grid{2, "[2,1,1]"}, Grid{2, "[1,1,2]"}, Grid{4, "[2,2,1]"}, Grid{4, "[1,1,4]"},
+                       Grid{4, "[4,1,1]"}, Grid{4, "[2,2,1]", "x=[3.1e-3]"}}) {
+    std::vector<std::string> sets{"run.max_steps=3000", "run.check_interval=5e-5",
+                                  std::string("domain.process_grid=") + g.grid};
+    if (*g.cuts) {
+      sets.push_back(std::string("domain.cuts.") + g.cuts);
+      sets.push_back("domain.cuts.y=[2.2e-3]");
+    }
+    const BodyStates got = run_scene_on(g.ranks, kViolentDeposition, sets,
+                                        dir + "/" + std::to_string(g.ranks) + g.grid + (*g.cuts ? "cuts" : ""));
     if (rank == 0) {
       EXPECT_EQ(got.size(), 1088u);
       EXPECT_EQ(count_differences(reference, got, g.grid), 0) << g.ranks << " ranks, grid " << g.grid;
       // The lattice filled the 12 mm box; the fallen bed is 7.5 mm high (measured).
-      cross += expect_split_and_moved(dir + "/" + std::to_string(g.ranks) + g.grid, g.ranks, 9e-3);
+      cross += expect_split_and_moved(dir + "/" + std::to_string(g.ranks) + g.grid + (*g.cuts ? "cuts" : ""), g.ranks, 9e-3);
     }
   }
   if (rank == 0) {
