@@ -11,7 +11,10 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "core/decomposition.hpp"
 #include "core/h5_file.hpp"
+#include "fluid/flow_solver.hpp"
+#include "support/flow_shapes.hpp"
 #include "support/scene_runs.hpp"
 
 using namespace tessera;
@@ -119,4 +122,114 @@ TEST(FlowRanks, RestartIsBitwiseAtTheSameRankCount) {
     EXPECT_LT(max_diff(a.f, c.f), 1e-8);
     EXPECT_LT(max_diff(a.u, c.u), 1e-8);
   }
+}
+
+namespace {
+
+// The heavy drop of the seed's size (5.5 mm, water in air, 1000 : 1, both viscous, no gravity)
+// moving at 1 m/s through still air in a periodic 2 cm box, on a communicator: the total
+// momentum, the drop's (liquid) momentum and kinetic energy, and its extent across the motion after
+// each step.
+struct HeavyDrop {
+  std::vector<double> total, drop, energy;  // x-momentum of all, of the liquid; the liquid's KE
+  std::vector<double> extent;  // the liquid's rms extent across the motion (y)
+  double volume0 = 0, volume = 0, extent0 = 0;
+  double travelled = 0;
+};
+
+HeavyDrop periodic_heavy_drop(MPI_Comm comm, int steps) {
+  Decomposition decomp(comm, {0, 0, 0}, {0.02, 0.02, 0.02});
+  FlowSettings st;
+  st.cells = {24, 24, 24};
+  for (auto& b : st.boundaries) b = {BoundaryKind::periodic, BoundaryKind::periodic};
+  st.gravity = {};
+  st.poisson.rtol = 1e-10;
+  FlowSolver s(decomp, st);
+  const Vec3 centre{0.01, 0.01, 0.01};
+  auto inside = [&](const Vec3& p) { return dot(p - centre, p - centre) < 0.0055 * 0.0055 / 4; };
+  s.initialize([&](int i, int j, int k) {
+    const double f = test::sampled_fraction(s.grid(), i, j, k, inside);
+    return FlowSolver::CellState{f, {f > 0 ? 1.0 : 0.0, 0, 0}};  // mass-averaged: the drop's cells move
+  });
+  const FluidGrid& g = s.grid();
+  auto sums = [&](double out[5]) {  // P_x, P_x of the liquid, KE of the liquid, V_liquid, sum f V (y - y_c)^2
+    double local[5] = {0, 0, 0, 0, 0};
+    for (int k = g.begin(2); k < g.end(2); ++k)
+      for (int j = g.begin(1); j < g.end(1); ++j)
+        for (int i = g.begin(0); i < g.end(0); ++i) {
+          const std::size_t c = g.at(i, j, k);
+          const double f = s.fraction()[c], u = s.velocity(0)[c], m = s.density()[c] * g.cell_volume();
+          const double ml = st.liquid.density * f * g.cell_volume();
+          double speed2 = 0;
+          for (int d = 0; d < 3; ++d) speed2 += s.velocity(d)[c] * s.velocity(d)[c];
+          local[0] += m * u;
+          local[1] += ml * u;
+          local[2] += 0.5 * ml * speed2;
+          local[3] += f * g.cell_volume();
+          const Vec3 x = g.centre(i, j, k);
+          local[4] += f * g.cell_volume() * (x.y - centre.y) * (x.y - centre.y);
+        }
+    MPI_Allreduce(local, out, 5, MPI_DOUBLE, MPI_SUM, comm);
+  };
+  HeavyDrop out;
+  double v[5];
+  sums(v);
+  out.volume0 = v[3];
+  out.extent0 = std::sqrt(v[4] / v[3]);
+  double t = 0;
+  for (int n = 0; n < steps; ++n) {
+    std::string limit;
+    const double dt = std::min(s.stable_dt(limit), 2e-4);
+    s.advance(dt);
+    t += dt;
+    sums(v);
+    out.total.push_back(v[0]);
+    out.drop.push_back(v[1]);
+    out.energy.push_back(v[2]);
+    out.extent.push_back(std::sqrt(v[4] / v[3]));
+  }
+  out.volume = v[3];
+  out.travelled = t * 1.0;
+  return out;
+}
+
+}  // namespace
+
+TEST(FlowRanks, HeavyDropCrossesAPeriodicBoxConservingMomentum) {
+  // Issue 18. No walls, no gravity: the total momentum is conserved by the scheme in one fluid
+  // (C8's flow test) and here, across the 1000 : 1 interface, up to F10's density-jump residual,
+  // which a drive-free drop keeps small: bound 1e-9 of the momentum (measured 1.8e-14). The drop
+  // loses momentum only to the air, so its kinetic energy falls at every step; its volume is kept to
+  // round-off. Shape: no surface tension holds it, so the air's stagnation pressure flattens it;
+  // over three box crossings (60 ms, T* = t U / D sqrt(rho_g / rho_l) = 0.35) its rms extent across
+  // the motion grows at every crossing (1.25 -> 1.31, 1.42, 1.51 mm, measured), a guard bounds it at
+  // 1.5 times the start (the drop stays one compact body). 1 and 4 ranks agree to 1e-6 of the
+  // momentum (the Poisson tolerance through CG's rank-ordered sums; measured 0 to 1.6e-19).
+  const int rank = test::world_rank();
+  const int steps = 300;
+  const HeavyDrop four = periodic_heavy_drop(MPI_COMM_WORLD, steps);
+  const HeavyDrop one = periodic_heavy_drop(MPI_COMM_SELF, steps);
+  if (rank != 0) return;
+  const double p0 = one.total.front();
+  double drift = 0, rank_diff = 0;
+  int energy_rises = 0;
+  for (int n = 0; n < steps; ++n) {
+    drift = std::max(drift, std::abs(one.total[n] - p0));
+    rank_diff = std::max(rank_diff, std::abs(one.drop[n] - four.drop[n]));
+    energy_rises += n > 0 && one.energy[n] > one.energy[n - 1];
+  }
+  std::printf("heavy drop, %d steps (%.3g box lengths): total momentum drift %.3e of %.4e kg m/s (%.1e); drop momentum %.4e -> %.4e; "
+              "KE rises %d times; volume %.3e; rms extent across %.4f mm at the start, %.4f %.4f %.4f after 1, 2, 3 crossings; 1 vs 4 ranks %.3e\n",
+              steps, one.travelled / 0.02, drift, p0, drift / p0, one.drop.front(), one.drop.back(), energy_rises,
+              (one.volume - one.volume0) / one.volume0, one.extent0 * 1e3, one.extent[99] * 1e3, one.extent[199] * 1e3,
+              one.extent[299] * 1e3, rank_diff);
+  EXPECT_LT(drift, 1e-9 * p0);
+  EXPECT_LT(one.drop.back(), one.drop.front());
+  EXPECT_EQ(energy_rises, 0);
+  EXPECT_LT(std::abs(one.volume - one.volume0), 1e-12 * one.volume0);
+  EXPECT_GT(one.extent[99], one.extent0);
+  EXPECT_GT(one.extent[199], one.extent[99]);
+  EXPECT_GT(one.extent[299], one.extent[199]);
+  EXPECT_LT(one.extent[299], 1.5 * one.extent0);
+  EXPECT_LT(rank_diff, 1e-6 * p0);
 }

@@ -19,28 +19,16 @@
 #include "core/errors.hpp"
 #include "fluid/flow_solver.hpp"
 #include "fluid/plic.hpp"
+#include "support/flow_shapes.hpp"
 
 using namespace tessera;
+using tessera::test::sampled_fraction;
 
 namespace {
 
 using Bc = std::array<std::array<BoundaryKind, 2>, 3>;
 
 Bc all(BoundaryKind k) { return {{{k, k}, {k, k}, {k, k}}}; }
-
-// Liquid fraction of a cell by sub-sampling (m^3 points): the initial shapes.
-double sampled_fraction(const FluidGrid& g, int i, int j, int k, const std::function<bool(const Vec3&)>& inside,
-                        int m = 8) {
-  int count = 0;
-  for (int c = 0; c < m; ++c)
-    for (int b = 0; b < m; ++b)
-      for (int a = 0; a < m; ++a) {
-        const Vec3 p{g.lo().x + (i + (a + 0.5) / m) * g.h(0), g.lo().y + (j + (b + 0.5) / m) * g.h(1),
-                     g.lo().z + (k + (c + 0.5) / m) * g.h(2)};
-        count += inside(p);
-      }
-  return double(count) / (m * m * m);
-}
 
 bool rank0() {
   int r = 0;
