@@ -3,6 +3,8 @@
 #pragma once
 #include <array>
 
+#include "fluid/fluid_grid.hpp"
+
 namespace tessera::flow_cells {
 
 // Cells with f below kEmpty or above 1 - kEmpty carry no interface (round-off residue of the
@@ -24,6 +26,20 @@ void for_box(const std::array<int, 3>& lo, const std::array<int, 3>& hi, F&& fn)
   for (int k = lo[2]; k < hi[2]; ++k)
     for (int j = lo[1]; j < hi[1]; ++j)
       for (int i = lo[0]; i < hi[0]; ++i) fn(i, j, k);
+}
+
+// fn(d, side, lo, hi) for each side of the domain that this rank's cells touch and that is closed
+// (neither periodic nor outflow): [lo, hi) is the layer of owned cells along it.
+template <class F>
+void for_wall_layers(const FluidGrid& g, F&& fn) {
+  for (int d = 0; d < 3; ++d)
+    for (int side = 0; side < 2; ++side) {
+      if (!g.at_domain_edge(d, side) || g.boundary(d, side) == BoundaryKind::outflow) continue;
+      std::array<int, 3> lo{g.begin(0), g.begin(1), g.begin(2)}, hi{g.end(0), g.end(1), g.end(2)};
+      lo[d] = side == 0 ? 0 : g.cells()[d] - 1;
+      hi[d] = lo[d] + 1;
+      fn(d, side, lo, hi);
+    }
 }
 
 }  // namespace tessera::flow_cells

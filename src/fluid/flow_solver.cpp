@@ -13,6 +13,7 @@
 namespace tessera {
 
 using flow_cells::for_box;
+using flow_cells::for_wall_layers;
 using flow_cells::kEmpty;
 using flow_cells::kFull;
 
@@ -376,23 +377,18 @@ void FlowSolver::viscous(double dt) {
         }
     }
     // The walls' share: the stress on the wall faces, times their area and dt (the momentum budget).
-    for (int d = 0; d < 3; ++d)
-      for (int side = 0; side < 2; ++side) {
-        if (!g.at_domain_edge(d, side) || g.boundary(d, side) == BoundaryKind::outflow) continue;
-        std::array<int, 3> lo{g.begin(0), g.begin(1), g.begin(2)}, hi{g.end(0), g.end(1), g.end(2)};
-        lo[d] = side == 0 ? 0 : g.cells()[d] - 1;
-        hi[d] = lo[d] + 1;
-        const std::ptrdiff_t sd = g.stride(d), sq = g.stride(q);
-        const double inv_h = 1 / h[d], cross = q == d ? 0.0 : 1 / (4 * h[q]), area = h[0] * h[1] * h[2] * inv_h;
-        const double* uq = u_[q].data();
-        const double* ud = u_[d].data();
-        const double* mf = mu_face[d].data();
-        for_box(lo, hi, [&](int i, int j, int k) {
-          const std::size_t c = g.at(i, j, k), face = side == 0 ? c : c + sd;
-          const double stress = mf[face] * face_strain(uq, ud, face, sd, sq, inv_h, cross, q == d);
-          wall_impulse_[q] += (side == 0 ? -stress : stress) * area * dt;
-        });
-      }
+    for_wall_layers(g, [&](int d, int side, const std::array<int, 3>& lo, const std::array<int, 3>& hi) {
+      const std::ptrdiff_t sd = g.stride(d), sq = g.stride(q);
+      const double inv_h = 1 / h[d], cross = q == d ? 0.0 : 1 / (4 * h[q]), area = h[0] * h[1] * h[2] * inv_h;
+      const double* uq = u_[q].data();
+      const double* ud = u_[d].data();
+      const double* mf = mu_face[d].data();
+      for_box(lo, hi, [&](int i, int j, int k) {
+        const std::size_t c = g.at(i, j, k), face = side == 0 ? c : c + sd;
+        const double stress = mf[face] * face_strain(uq, ud, face, sd, sq, inv_h, cross, q == d);
+        wall_impulse_[q] += (side == 0 ? -stress : stress) * area * dt;
+      });
+    });
     if (!stress_div_[q].empty()) std::copy(work_[q].begin(), work_[q].end(), stress_div_[q].begin());
     const double* uq = u_[q].data();
     const double* rho = rho_.data();
@@ -447,30 +443,26 @@ double spalding_stress_factor(double speed, double y, double nu) {
 // F = spalding_stress_factor(|u_t|, h/2, mu/rho) from the velocity before the step.
 void FlowSolver::wall_model_stress(double dt) {
   const FluidGrid& g = *grid_;
-  for (int d = 0; d < 3; ++d)
-    for (int side = 0; side < 2; ++side) {
-      if (!g.at_domain_edge(d, side) || g.boundary(d, side) != BoundaryKind::no_slip) continue;
-      std::array<int, 3> lo{g.begin(0), g.begin(1), g.begin(2)}, hi{g.end(0), g.end(1), g.end(2)};
-      lo[d] = side == 0 ? 0 : g.cells()[d] - 1;
-      hi[d] = lo[d] + 1;
-      const double h = g.h(d), y = h / 2;
-      for_box(lo, hi, [&](int i, int j, int k) {
-        const std::size_t c = g.at(i, j, k);
-        double speed2 = 0;
-        for (int q = 0; q < 3; ++q)
-          if (q != d) speed2 += u_[q][c] * u_[q][c];
-        const double mu = mu_[c], rho = rho_[c];
-        const double factor = spalding_stress_factor(std::sqrt(speed2), y, mu / rho);
-        const double laminar = dt * 2 * mu / (rho * h * h);
-        const double mass = rho * g.h(0) * g.h(1) * g.h(2);
-        for (int q = 0; q < 3; ++q)
-          if (q != d) {
-            const double before = work_[q][c];
-            work_[q][c] = (work_[q][c] + laminar * u_[q][c]) / (1 + laminar * factor);
-            wall_impulse_[q] += mass * (work_[q][c] - before);  // the law's stress in place of F8's
-          }
-      });
-    }
+  for_wall_layers(g, [&](int d, int side, const std::array<int, 3>& lo, const std::array<int, 3>& hi) {
+    if (g.boundary(d, side) != BoundaryKind::no_slip) return;
+    const double h = g.h(d), y = h / 2;
+    for_box(lo, hi, [&](int i, int j, int k) {
+      const std::size_t c = g.at(i, j, k);
+      double speed2 = 0;
+      for (int q = 0; q < 3; ++q)
+        if (q != d) speed2 += u_[q][c] * u_[q][c];
+      const double mu = mu_[c], rho = rho_[c];
+      const double factor = spalding_stress_factor(std::sqrt(speed2), y, mu / rho);
+      const double laminar = dt * 2 * mu / (rho * h * h);
+      const double mass = rho * g.h(0) * g.h(1) * g.h(2);
+      for (int q = 0; q < 3; ++q)
+        if (q != d) {
+          const double before = work_[q][c];
+          work_[q][c] = (work_[q][c] + laminar * u_[q][c]) / (1 + laminar * factor);
+          wall_impulse_[q] += mass * (work_[q][c] - before);  // the law's stress in place of F8's
+        }
+    });
+  });
 }
 
 PoissonStats FlowSolver::project(double dt, bool with_gravity) {
@@ -610,19 +602,14 @@ void FlowSolver::wall_pressure_impulse(double dt) {
   // these values, the projection's momentum change of a fluid of one density is exactly gravity's
   // plus the walls' (interior faces cancel in the sum of the cells' mean face accelerations).
   const FluidGrid& g = *grid_;
-  for (int d = 0; d < 3; ++d)
-    for (int side = 0; side < 2; ++side) {
-      if (!g.at_domain_edge(d, side) || g.boundary(d, side) == BoundaryKind::outflow) continue;
-      std::array<int, 3> lo{g.begin(0), g.begin(1), g.begin(2)}, hi{g.end(0), g.end(1), g.end(2)};
-      lo[d] = side == 0 ? 0 : g.cells()[d] - 1;
-      hi[d] = lo[d] + 1;
-      const double h = g.h(d), area = g.h(0) * g.h(1) * g.h(2) / h, gd = settings_.gravity[d];
-      for_box(lo, hi, [&](int i, int j, int k) {
-        const std::size_t c = g.at(i, j, k);
-        const double wall = side == 0 ? p_[c] - 0.5 * rho_[c] * gd * h : p_[c] + 0.5 * rho_[c] * gd * h;
-        wall_impulse_[d] += (side == 0 ? wall : -wall) * area * dt;
-      });
-    }
+  for_wall_layers(g, [&](int d, int side, const std::array<int, 3>& lo, const std::array<int, 3>& hi) {
+    const double h = g.h(d), area = g.h(0) * g.h(1) * g.h(2) / h, gd = settings_.gravity[d];
+    for_box(lo, hi, [&](int i, int j, int k) {
+      const std::size_t c = g.at(i, j, k);
+      const double wall = side == 0 ? p_[c] - 0.5 * rho_[c] * gd * h : p_[c] + 0.5 * rho_[c] * gd * h;
+      wall_impulse_[d] += (side == 0 ? wall : -wall) * area * dt;
+    });
+  });
 }
 
 Vec3 FlowSolver::last_wall_impulse() const {
