@@ -438,6 +438,87 @@ TEST(RayleighTaylor, LinearGrowthRateAgainstViscousTheory) {
   }
 }
 
+// Early wetting of a drop hitting a no-slip wall without surface tension (issue 18): the wetted
+// radius a(t) = sqrt(3 R V t) (Wagner's theory, Riboux & Gordillo 2014), against the geometric
+// sqrt(2 R V t) of a sphere cut by the wall. A quarter of the drop (symmetry planes x = 0, y = 0),
+// water in air, R = 1 mm, V = 1 m/s, no gravity, touching at t = 0. a(t): along y = 0 in the wall's
+// cell layer, the furthest point where the liquid fraction reaches 1/2 (interpolated between cells).
+double wetted_radius_exponent(int cells_per_diameter, std::vector<std::pair<double, double>>& samples) {
+  const double R = 1e-3, V = 1.0, L = 1.6 * R, H = 2.4 * R;
+  const int n = static_cast<int>(std::lround(cells_per_diameter * L / (2 * R)));
+  const int nz = static_cast<int>(std::lround(cells_per_diameter * H / (2 * R)));
+  Decomposition decomp(MPI_COMM_WORLD, {0, 0, 0}, {L, L, H});
+  FlowSettings st;
+  st.cells = {n, n, nz};
+  st.boundaries = all(BoundaryKind::no_slip);
+  st.boundaries[0] = {BoundaryKind::free_slip, BoundaryKind::outflow};
+  st.boundaries[1] = {BoundaryKind::free_slip, BoundaryKind::outflow};
+  st.boundaries[2] = {BoundaryKind::no_slip, BoundaryKind::outflow};
+  st.gravity = {};
+  st.poisson.rtol = 1e-8;
+  FlowSolver s(decomp, st);
+  const FluidGrid& g = s.grid();
+  const Vec3 centre{0, 0, R};  // touching the wall at t = 0
+  auto inside = [&](const Vec3& p) { return dot(p - centre, p - centre) < R * R; };
+  s.initialize([&](int i, int j, int k) {
+    const double f = sampled_fraction(g, i, j, k, inside);
+    return FlowSolver::CellState{f, {0, 0, f > 0 ? -V : 0.0}};
+  });
+  double t = 0;
+  samples.clear();
+  while (t < 0.2 * R / V) {
+    std::string limit;
+    const double dt = std::min(s.stable_dt(limit), 0.002 * R / V);
+    s.advance(dt);
+    t += dt;
+    double a = 0;
+    if (g.begin(1) == 0 && g.begin(2) == 0)  // the rank holding the wall's row along y = 0
+      for (int i = g.begin(0); i < g.end(0); ++i) {
+        const double f0 = s.fraction()[g.at(i, 0, 0)];
+        const double f1 = i + 1 < g.end(0) ? s.fraction()[g.at(i + 1, 0, 0)] : 0.0;
+        if (f0 >= 0.5 && f1 < 0.5) a = std::max(a, (i + 0.5 + (f0 - 0.5) / (f0 - f1)) * g.h(0));
+      }
+    a = g.reduce_max(a);
+    if (t > 0.02 * R / V) samples.emplace_back(t, a);
+  }
+  // Least squares of a^2 = c R V t: c.
+  double num = 0, den = 0;
+  for (const auto& [tt, aa] : samples) num += aa * aa * tt, den += tt * tt;
+  return num / den / (R * V);
+}
+
+// What is checked: a(t) grows as t^(1/2) (the log-log slope of a over the window: measured 0.324,
+// 0.449, 0.491 at 20, 40, 80 cells per diameter, converging; bounds 0.25, 0.1, 0.05)
+// and ahead of the geometric circle (a^2 / (R V t) above 2: the pressure pushes liquid out ahead of
+// the sphere's intersection, as Wagner's theory says). Wagner's prefactor 3 itself is reported, not
+// bounded: measured 2.72, 3.17 and 3.53 at 20, 40 and 80 cells per diameter (2026-11-30), rising
+// with the grid, because the footprint at f = 1/2 in the wall's cell layer takes in more of the
+// lamella as the layer thins; the turnover point itself is not resolved by this definition.
+void check_wetting(int cells, double slope_bound) {
+  std::vector<std::pair<double, double>> samples;
+  const double c = wetted_radius_exponent(cells, samples);
+  const auto& [t0, a0] = samples.front();
+  const auto& [t1, a1] = samples.back();
+  const double slope = std::log(a1 / a0) / std::log(t1 / t0);
+  if (rank0()) {
+    std::printf("drop on a wall, %d cells per diameter: a^2 = %.3f R V t (Wagner 3, geometric 2), a ~ t^%.3f;", cells, c,
+                slope);
+    for (std::size_t m = 0; m < samples.size(); m += samples.size() / 5 + 1)
+      std::printf("  t %.3f ms a %.3f mm", samples[m].first * 1e3, samples[m].second * 1e3);
+    std::printf("\n");
+  }
+  EXPECT_NEAR(slope, 0.5, slope_bound) << cells;
+  EXPECT_GT(c, 2.0) << cells;
+}
+
+TEST(DropOnWall, WettedRadiusGrowsAsTheSquareRootOfTime) {
+  check_wetting(20, 0.25);  // the first samples hold the initial lay-out's footprint (measured 0.32)
+  check_wetting(40, 0.1);
+}
+
+// The finer grid of docs/validation.md (about 50 s): --gtest_also_run_disabled_tests.
+TEST(DropOnWall, DISABLED_WettedRadiusOn80CellsPerDiameter) { check_wetting(80, 0.05); }
+
 // Spalding's law of the wall (fluid.wall_model: spalding). Its inverse against the explicit
 // y+(u+) formula (Spalding 1961): factor = y+/u+ to 1e-10 over the sublayer, buffer and log
 // regions; 1 in the sublayer (laminar stress); the log law u+ = ln(y+)/0.41 + 5.2 within 1 % at
