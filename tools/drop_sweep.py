@@ -19,9 +19,9 @@ Usage: drop_sweep.py run   [--set-of series|study] [--case cases/drop_on_sand/sm
        drop_sweep.py plot  [--set-of series|study] [--out ...]
            series: the table (aspect, v, mv, V by eqs. 14 and 13, L, H, the bed's V before the drop,
            displaced grains, wall) in OUT/table.md and V against mv per shape in
-           OUT/crater_vs_momentum.png (Fig. 15). study: each factor's change of V and of the
-           displaced-grain count against its wall time, beside the scatter of the orientation
-           repeats, in OUT/study.md and OUT/study.png.
+           OUT/crater_vs_momentum.png (Fig. 15). study: each run's V and displaced-grain count
+           against the mean and standard deviation of the orientation repeats (the base run among
+           them), and V against its wall time, in OUT/study.md and OUT/study.png.
 """
 import argparse, fcntl, glob, json, math, os, shlex, subprocess, sys
 
@@ -166,16 +166,22 @@ def plot_study(args, rows):
     if base is None:
         sys.exit('the study needs its base run')
     repeats = [r for n, r in rows.items() if n == 'base' or n.startswith('orientation_')]
-    mean = sum(r['V'] for r in repeats) / len(repeats)
-    sd = math.sqrt(sum((r['V'] - mean) ** 2 for r in repeats) / (len(repeats) - 1)) if len(repeats) > 1 else float('nan')
-    lines = ['scatter of V over %d beds of other orientations: mean %.1f mm^3, standard deviation %.1f mm^3' % (
-        len(repeats), mean, sd), '',
-        '| run | V (mm^3) | V - V_base (mm^3) | within the scatter | displaced grains | wall (s) | wall / base |',
-        '|---|---|---|---|---|---|---|']
+    def spread(key):
+        m = sum(r[key] for r in repeats) / len(repeats)
+        return m, (math.sqrt(sum((r[key] - m) ** 2 for r in repeats) / (len(repeats) - 1)) if len(repeats) > 1
+                   else float('nan'))
+    mean, sd = spread('V')
+    mean_moved, sd_moved = spread('moved')
+    lines = ['scatter over %d beds of other orientations (the base run among them): V mean %.1f mm^3, standard '
+             'deviation %.1f mm^3; displaced grains mean %.1f, standard deviation %.1f' % (
+                 len(repeats), mean, sd, mean_moved, sd_moved), '',
+             '| run | V (mm^3) | V - mean (mm^3) | within 2 sd | displaced grains | within 2 sd | wall (s) | wall / base |',
+             '|---|---|---|---|---|---|---|---|']
     for n, r in sorted(rows.items()):
-        d = r['V'] - base['V']
-        lines.append('| %s | %.1f | %+.1f | %s | %d | %.0f | %.2f |' % (
-            n, r['V'], d, 'yes' if abs(d) <= 2 * sd else 'no', r['moved'], r['wall'], r['wall'] / base['wall']))
+        d, dm = r['V'] - mean, r['moved'] - mean_moved
+        lines.append('| %s | %.1f | %+.1f | %s | %d | %s | %.0f | %.2f |' % (
+            n, r['V'], d, 'yes' if abs(d) <= 2 * sd else 'no', r['moved'], 'yes' if abs(dm) <= 2 * sd_moved else 'no',
+            r['wall'], r['wall'] / base['wall']))
     text = '\n'.join(lines)
     print(text)
     open(os.path.join(args.out, 'study.md'), 'w').write(text + '\n')
@@ -184,14 +190,15 @@ def plot_study(args, rows):
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(6.5, 4.5))
     for n, r in sorted(rows.items()):
-        ax.plot(r['wall'], r['V'] - base['V'], 'o' if not n.startswith('orientation') else 'x', color='k' if n.startswith('orientation') else None)
-        ax.annotate(n, (r['wall'], r['V'] - base['V']), fontsize=7, xytext=(3, 3), textcoords='offset points')
+        repeat = n == 'base' or n.startswith('orientation')
+        ax.plot(r['wall'], r['V'] - mean, 'x' if repeat else 'o', color='k' if repeat else None)
+        ax.annotate(n, (r['wall'], r['V'] - mean), fontsize=7, xytext=(3, 3), textcoords='offset points')
     if sd == sd:
         ax.axhspan(-2 * sd, 2 * sd, color='grey', alpha=0.2, label='2 sd of the orientation repeats')
         ax.legend(fontsize=8)
     ax.axhline(0, color='k', lw=0.5)
     ax.set_xlabel('wall time [s]')
-    ax.set_ylabel('V - V(base) [mm$^3$]')
+    ax.set_ylabel('V - mean of the orientation repeats [mm$^3$]')
     ax.set_title('crater volume change per factor against its cost')
     fig.tight_layout()
     fig.savefig(os.path.join(args.out, 'study.png'), dpi=120)
