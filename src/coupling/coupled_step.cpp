@@ -16,6 +16,7 @@ CouplingSettings CouplingSettings::from_config(const ConfigNode& c) {
   s.liquid_in_pores = c.flag("liquid_in_pores", true);
   s.fixed_bodies = c.choice("bodies", {"moving", "fixed"}, "moving") == "fixed";
   s.momentum_budget = c.flag("momentum_budget", false);
+  s.conserve_momentum = c.flag("conserve_momentum", false);
   if (s.momentum_budget && (s.fixed_bodies || !s.fluid_force))
     throw InputError("coupling.momentum_budget", "true",
                      "the budget needs moving bodies that feel the fluid (bodies: moving, fluid_force: true)");
@@ -31,6 +32,9 @@ CoupledSolver::CoupledSolver(FlowSolver& flow, DemSolver& dem, CouplingSettings 
              settings.layout_tolerance, settings.partial), liquid_(flow.grid()), dem_stable_dt_(dem.dt()) {
   dem_.use_external_loads(settings_.fluid_force && !settings_.fixed_bodies);
   flow_.keep_stress_divergence(loads_computed());
+  const bool conserve = settings_.conserve_momentum && settings_.fluid_force && !settings_.fixed_bodies;
+  flow_.keep_advection_change(conserve);
+  solid_.conserve_momentum(conserve);
 }
 
 void CoupledSolver::start(bool fresh) {
@@ -69,7 +73,7 @@ CoupledStepStats CoupledSolver::step(double dt) {
   }
   if (loads_computed()) {
     auto t = timers_.scope("fluid_force");
-    solid_.fluid_loads(flow_, dem_);
+    solid_.fluid_loads(flow_, dem_, dt);
   }
   if (settings_.fixed_bodies) {
     dem_.set_clock(dem_.time() + dt, dem_.steps());  // held: the clock only (output times)

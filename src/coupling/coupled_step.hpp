@@ -47,6 +47,10 @@ struct CouplingSettings {
   // `momentum_budget: true`: the scene keeps the momentum budget of fluid and bodies (C8) from its
   // start (or restart) and reports it in summary.json (three more passes over the cells per step).
   bool momentum_budget = false;
+  // `conserve_momentum: true`: the bodies take MICS's two momentum leaks (C8), the advection's change
+  // of their virtual fluid and the momentum of the fluid their lay-out displaces. Off by default:
+  // the seed's scheme.
+  bool conserve_momentum = false;
   static CouplingSettings from_config(const ConfigNode& coupling);
 };
 

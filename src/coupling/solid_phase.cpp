@@ -284,6 +284,19 @@ void SolidPhase::exchange_sums(const FlowSolver& flow, DemSolver& dem, double dt
       for (int k = 0; k < kWidth; ++k) acc[k] += add[k];
     }
   }
+  if (conserve_)  // C8: the momentum of the fluid each body's new lay-out took (dV > 0) or gave back
+    for (std::size_t n = 0; n < moves_.body.size(); ++n) {
+      const std::size_t b = moves_.body[n];
+      const Vec3 xb = p.pos(b);
+      double* acc = &loads_[kWidth * b];
+      for (std::size_t e = moves_.first[n]; e < moves_.first[n + 1]; ++e) {
+        const std::size_t c = moves_.cell[e];
+        const auto idx = g.index(c);
+        const Vec3 m = (rho_f[c] * moves_.dv[e]) * Vec3{flow.velocity(0)[c], flow.velocity(1)[c], flow.velocity(2)[c]};
+        const Vec3 rm = cross(g.centre(idx[0], idx[1], idx[2]) - xb, m);
+        for (int d = 0; d < 3; ++d) acc[1 + d] += m[d], acc[4 + d] += rm[d];
+      }
+    }
   dem.reverse_add_ghosts(loads_, kWidth);
 }
 
@@ -292,7 +305,7 @@ void SolidPhase::exchange_momentum(const FlowSolver& flow, DemSolver& dem, doubl
   ParticleStore& p = dem.particles();
   for (std::size_t b = 0; b < p.owned; ++b) {
     const double* a = &loads_[kExchangeWidth * b];
-    if (a[0] == 0) continue;
+    if (a[0] == 0 && a[1] == 0 && a[2] == 0 && a[3] == 0 && a[4] == 0 && a[5] == 0 && a[6] == 0) continue;
     const ShapeTemplate& t = dem.shapes()[static_cast<std::size_t>(p.shape[b] - 1)];
     const double rho = p.mass[b] / t.volume;
     const Quaternion q{p.q[4 * b], p.q[4 * b + 1], p.q[4 * b + 2], p.q[4 * b + 3]};
@@ -338,10 +351,11 @@ void SolidPhase::held_exchange(const FlowSolver& flow, DemSolver& dem, double dt
     }
 }
 
-void SolidPhase::fluid_loads(const FlowSolver& flow, DemSolver& dem) {
+void SolidPhase::fluid_loads(const FlowSolver& flow, DemSolver& dem, double dt) {
   const FluidGrid& g = grid_;
   ParticleStore& p = dem.particles();
   const bool viscous = !flow.stress_divergence(0).empty();
+  const bool advection = conserve_ && dt > 0 && !flow.advection_change(0).empty();
   loads_.assign(6 * p.size(), 0.0);
   for (std::size_t n = 0; n < body_index_.size(); ++n) {
     const std::size_t b = body_index_[n];
@@ -353,6 +367,8 @@ void SolidPhase::fluid_loads(const FlowSolver& flow, DemSolver& dem) {
       Vec3 density = flow.pressure_force(idx[0], idx[1], idx[2]);  // N/m^3
       if (viscous)
         for (int d = 0; d < 3; ++d) density[d] += flow.stress_divergence(d)[c];
+      if (advection)
+        for (int d = 0; d < 3; ++d) density[d] += flow.advection_change(d)[c] / dt;
       const Vec3 f = density * volume_[e];
       force += f;
       moment += cross(g.centre(idx[0], idx[1], idx[2]) - xb, f);

@@ -83,8 +83,13 @@ class SolidPhase {
   // for FlowSolver::set_cell_drag; nullptr with the seed's correction.
   const CellDrag* drag(const FlowSolver& flow, const DemSolver& dem, double dt);
   static constexpr double kMaxDrag = 100;  // lambda dt in the projection at most (its coefficients)
-  // The fluid force and moment (C3; the reaction to C4c's drag comes with the exchange, C4a).
-  void fluid_loads(const FlowSolver& flow, DemSolver& dem);
+  // The fluid force and moment (C3; the reaction to C4c's drag comes with the exchange, C4a). With
+  // conserve_momentum(true) and the flow keeping its advection change, also that change of the
+  // virtual fluid in the body's cells over the flow step dt (theory C8).
+  void fluid_loads(const FlowSolver& flow, DemSolver& dem, double dt = 0);
+  // On: the two momentum leaks of C8 go to the bodies: the advection's change of their virtual
+  // fluid (C3) and the momentum of the fluid their new lay-out takes or gives back (C4a).
+  void conserve_momentum(bool on) { conserve_ = on; }
   // dt: the flow step the exchange and the correction stand for (0 at the start: a partly covered
   // cell is left as it is, unless the correction is the seed's per-step one).
   void exchange_momentum(const FlowSolver& flow, DemSolver& dem, double dt);
@@ -140,6 +145,7 @@ class SolidPhase {
   std::vector<std::pair<std::size_t, double>> scratch_;
   CellVolumes old_cells_;
   BodyMoves moves_;
+  bool conserve_ = false;
   void record_move(std::size_t b, const CellVolumes& before, const CellVolumes& after);
 };
 

@@ -94,6 +94,10 @@ void FlowSolver::fraction_changed() {
   update_properties();
 }
 
+void FlowSolver::keep_advection_change(bool on) {
+  for (auto& a : advection_change_) a = on ? grid_->make_field() : std::vector<double>{};
+}
+
 void FlowSolver::keep_stress_divergence(bool on) {
   for (auto& s : stress_div_) s = on ? grid_->make_field() : std::vector<double>{};
 }
@@ -231,7 +235,14 @@ FlowStepStats FlowSolver::advance(double dt) {
   FlowStepStats st;
   st.dt = dt;
   wall_impulse_ = {};
+  const bool keep = !advection_change_[0].empty();
+  if (keep)
+    for (int q = 0; q < 3; ++q)
+      for (std::size_t c = 0; c < rho_.size(); ++c) advection_change_[q][c] = rho_[c] * u_[q][c];
   advect(dt);
+  if (keep)
+    for (int q = 0; q < 3; ++q)
+      for (std::size_t c = 0; c < rho_.size(); ++c) advection_change_[q][c] = rho_[c] * u_[q][c] - advection_change_[q][c];
   if (settings_.liquid.viscosity > 0 || settings_.gas.viscosity > 0) {
     auto t = timers_.scope("viscous");
     viscous(dt);

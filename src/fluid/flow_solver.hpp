@@ -168,6 +168,10 @@ class FlowSolver {
   // On: the viscous stage keeps div(tau) per owned cell (N/m^3; the coupling's viscous force on
   // bodies reads it). Off (the default): not stored.
   void keep_stress_divergence(bool on);
+  // On: each step keeps the advection's change of the momentum per volume, (rho u)_after -
+  // (rho u)_before, per owned cell (kg/(m^2 s); the coupling's conservative option, theory C8).
+  void keep_advection_change(bool on);
+  const std::vector<double>& advection_change(int q) const { return advection_change_[q]; }
   // A cell drag held by the caller and applied in each step's projection (nullptr: none).
   void set_cell_drag(const CellDrag* drag) { drag_ = drag; }
   const std::vector<double>& stress_divergence(int q) const { return stress_div_[q]; }
@@ -205,6 +209,7 @@ class FlowSolver {
   std::array<std::vector<double>, 3> u_, uf_, face_accel_;
   std::array<std::vector<double>, 3> work_;  // the viscous stage's new velocities (swapped into u_)
   std::array<std::vector<double>, 3> stress_div_;  // div(tau) of the last viscous stage, when kept
+  std::array<std::vector<double>, 3> advection_change_;  // Delta (rho u) of the last advection, when kept
   std::array<std::vector<double>, 4> plic_;  // nx, ny, nz, alpha of interface cells
   std::vector<double> flux_f_, flux_m_, rhs_;
   const CellDrag* drag_ = nullptr;
