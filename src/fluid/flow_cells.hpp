@@ -20,6 +20,12 @@ constexpr double kEmpty = 1e-12;
 // kFull rho_g / rho_l (1e-9 for air and water) of its mass. Empty cells do not drift (no flux).
 constexpr double kFull = 1e-6;
 
+// Face viscosity: the harmonic mean of the two cells'. Exact for shear along a layered interface
+// (stresses in series) and bounded by twice the smaller viscosity, so that a gas cell beside the
+// interface keeps close to the gas's explicit viscous limit; the arithmetic mean would give it
+// half the liquid's viscosity over the gas's density (30 times the gas's nu for air and water).
+inline double face_viscosity(double a, double b) { return a + b > 0 ? 2 * a * b / (a + b) : 0.0; }
+
 // Loops over a box of global indices [lo, hi) in k, j, i order.
 template <class F>
 void for_box(const std::array<int, 3>& lo, const std::array<int, 3>& hi, F&& fn) {
