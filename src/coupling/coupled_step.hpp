@@ -45,7 +45,7 @@ struct CouplingSettings {
   // ((1 - alpha) h^2), implicit in the projection: the same on any step). Theory C4c.
   PartialCells partial;
   // `momentum_budget: true`: the scene keeps the momentum budget of fluid and bodies (C8) from its
-  // start (or restart) and reports it in summary.json (three more passes over the cells per step).
+  // start (or restart) and reports it in summary.json (four passes over the cells per step).
   bool momentum_budget = false;
   // `conserve_momentum: true`: the bodies take MICS's two momentum leaks (C8), the advection's change
   // of their virtual fluid and the momentum of the fluid their lay-out displaces. Off by default:
@@ -86,8 +86,8 @@ class CoupledSolver {
   // one step is not a steady body's force when dt changes: the velocity C4 leaves in a partly
   // covered cell scales with the step before (theory C4b).
   void average_held_loads();
-  // The momentum budget of fluid and bodies (C8), from now on, updated at three stages of every
-  // step (collective; three passes over the cells per step, so off unless asked for). Moving bodies
+  // The momentum budget of fluid and bodies (C8), from now on, updated at four stages of every
+  // step (collective; four passes over the cells per step, so off unless asked for). Moving bodies
   // with the fluid force only: held bodies' support and one-way coupling are outside it.
   void start_momentum_budget();
   const MomentumBudget& momentum_budget() const { return budget_; }
