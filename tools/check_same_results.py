@@ -8,7 +8,7 @@ last digits only (relative 1e-12): sums whose reduction became canonical.
   git worktree add /tmp/before OLD_COMMIT   # its case files, for the BEFORE binary
   tools/check_same_results.py BEFORE_BIN AFTER_BIN --before-root /tmp/before
                               [--cases deposition,grain_bed,bunker,flow] [--allow kinetic_energy,...]
-                              [--ranks 2] [--work /tmp/same]
+                              [--ranks 2] [--work /tmp/same] [--only-before | --reuse-before]
 
 Cases (2 ranks, about 12 minutes per binary on 2 cores in all):
   deposition  cases/deposition/small.yaml, to settled
@@ -116,6 +116,10 @@ def main():
     ap.add_argument("--allow", default="")
     ap.add_argument("--ranks", type=int, default=2)
     ap.add_argument("--work", default="/tmp/tessera_same")
+    ap.add_argument("--reuse-before", action="store_true",
+                    help="keep the BEFORE runs already in --work (a summary.json there): run only AFTER")
+    ap.add_argument("--only-before", action="store_true",
+                    help="run only the BEFORE binary (while the change is being written), compare nothing")
     ap.add_argument("--before-root", default=str(ROOT),
                     help="the checkout whose case files the BEFORE binary reads (git worktree of the old commit)")
     a = ap.parse_args()
@@ -126,8 +130,15 @@ def main():
             results = {}
             for label, binary, root in (("before", a.before, a.before_root), ("after", a.after, ROOT)):
                 out = Path(a.work) / label / sub
-                run(os.path.abspath(binary), root, a.ranks, case, sets, out)
                 results[label] = out
+                if label == "after" and a.only_before:
+                    continue
+                if label == "before" and a.reuse_before and (out / "summary.json").exists():
+                    continue
+                run(os.path.abspath(binary), root, a.ranks, case, sets, out)
+            if a.only_before:
+                print(f"{sub:14s} before done", flush=True)
+                continue
             diffs = []
             sa = json.load(open(results["before"] / "summary.json"))
             sb = json.load(open(results["after"] / "summary.json"))

@@ -14,16 +14,9 @@
 
 namespace tessera {
 
-void DemSolver::add_lever(KernelForce& f, const KernelGeometry& g, std::size_t body, double fx, double fy,
-                          double fz) const {
-  // Torque of an element force about its body's centre: (x_e - x) x F, the arm as the contact saw it.
-  const double ax = g.x - p_.x[3 * body], ay = g.y - p_.x[3 * body + 1], az = g.z - p_.x[3 * body + 2];
-  f.tx += ay * fz - az * fy, f.ty += az * fx - ax * fz, f.tz += ax * fy - ay * fx;
-}
-
 void DemSolver::store_forces() {
   for (std::size_t i = 0; i < p_.owned; ++i) {
-    const KernelForce fo = contact_load(i);
+    const KernelForce fo = entities_.load(i);
     p_.f[3 * i] = fo.fx, p_.f[3 * i + 1] = fo.fy, p_.f[3 * i + 2] = fo.fz;
     p_.torque[3 * i] = fo.tx, p_.torque[3 * i + 1] = fo.ty, p_.torque[3 * i + 2] = fo.tz;
   }
@@ -60,10 +53,9 @@ void DemSolver::fill_pair_coefficients() {
     last = key, last_index = it->second;
     return it->second;
   };
-  // Entries hold elements: their radius, and their body's material and mass.
-  const bool sh = shaped();
-  auto radius = [&](std::size_t e) { return sh ? e_r_[e] : p_.radius[e]; };
-  auto body = [&](std::size_t e) { return sh ? static_cast<std::size_t>(e_body_[e]) : e; };
+  // Entries hold entities: their radius, and their body's material and mass.
+  auto radius = [&](std::size_t e) { return entities_.radius(e); };
+  auto body = [&](std::size_t e) { return entities_.body(e); };
   pair_coefficient_.resize(list_.size());
   // Grains of many sizes make nearly every pair's (m*, R*) distinct: once the first 256 pairs show
   // that (more than half of them new sets), the rest get their own sets without the hash map.
@@ -84,11 +76,9 @@ void DemSolver::fill_pair_coefficients() {
   }
   // Walls: m* = m, R* = R (T7).
   const auto& prims = walls_.primitives();
-  wall_coefficient_.resize(wall_body_.size());
-  for (std::size_t k = 0; k < wall_body_.size(); ++k) {
-    const std::size_t e = wall_body_[k];
-    wall_coefficient_[k] = lookup({p_.material[body(e)], prims[wall_slot_[k]].material, p_.mass[body(e)], radius(e)});
-  }
+  plane_walls_.fill_coefficients(entities_, walls_, [&](int ma, int mb, double meff, double reff) {
+    return lookup({ma, mb, meff, reff});
+  });
   const auto& meshes = walls_.meshes();
   mesh_coefficient_.resize(mesh_entity_.size());
   for (std::size_t k = 0; k < mesh_entity_.size(); ++k) {
@@ -120,7 +110,7 @@ void DemSolver::compute_forces(bool update_history) {
   }
   {
     auto t = timers_.scope("wall_forces");
-    compute_wall_forces(dt);
+    plane_walls_.forces(entities_, p_, walls_, lanes_, coefficient_sets_.data(), model_.law(), dt);
     const auto& meshes = walls_.meshes();
     if (meshes.empty() && free_.empty()) return;
     mesh_hist_next_.clear();
@@ -140,16 +130,17 @@ void DemSolver::compute_forces(bool update_history) {
 // The pair loop's access to one mirror layout: packing a body's mirror, pass 1's overlap test, the
 // partner's prefetches, the gather of a pair into a lane and the accumulation of its force.
 struct DemSolver::SphereMirrors {  // 3D mirrors per element (spheres, shaped bodies' elements)
-  DemSolver& s;
+  const ParticleStore& p;
+  const ContactEntities& entities;
   KernelGeometry* g;
   KernelMotion* m;
   KernelForce* out;
   bool sh;
   void pack(std::size_t i) {
-    const double* x = &s.p_.x[3 * i];
-    const double* v = &s.p_.v[3 * i];
-    const double* w = &s.p_.omega[3 * i];
-    g[i] = {x[0], x[1], x[2], s.p_.radius[i]};
+    const double* x = &p.x[3 * i];
+    const double* v = &p.v[3 * i];
+    const double* w = &p.omega[3 * i];
+    g[i] = {x[0], x[1], x[2], p.radius[i]};
     m[i] = {v[0], v[1], v[2], w[0], w[1], w[2]};
   }
   bool touching(std::size_t a, std::size_t b) const {
@@ -174,16 +165,16 @@ struct DemSolver::SphereMirrors {  // 3D mirrors per element (spheres, shaped bo
     L.wz[j] = ma.wz * ga.r + mb.wz * gb.r;
   }
   void accumulate(const ContactLanes& L, std::size_t j, std::size_t ea, std::size_t eb) {
-    const std::size_t a = sh ? static_cast<std::size_t>(s.e_body_[ea]) : ea;
-    const std::size_t b = sh ? static_cast<std::size_t>(s.e_body_[eb]) : eb;
+    const std::size_t a = sh ? entities.body(ea) : ea;
+    const std::size_t b = sh ? entities.body(eb) : eb;
     KernelForce &fa = out[a], &fb = out[b];
     fa.fx += L.fx[j], fa.fy += L.fy[j], fa.fz += L.fz[j];
     fb.fx -= L.fx[j], fb.fy -= L.fy[j], fb.fz -= L.fz[j];
     fa.tx -= L.nx[j] * L.ra[j], fa.ty -= L.ny[j] * L.ra[j], fa.tz -= L.nz[j] * L.ra[j];
     fb.tx -= L.nx[j] * L.rb[j], fb.ty -= L.ny[j] * L.rb[j], fb.tz -= L.nz[j] * L.rb[j];
     if (sh) {
-      s.add_lever(fa, g[ea], a, L.fx[j], L.fy[j], L.fz[j]);
-      s.add_lever(fb, g[eb], b, -L.fx[j], -L.fy[j], -L.fz[j]);
+      entities.add_lever(fa, g[ea], a, L.fx[j], L.fy[j], L.fz[j]);
+      entities.add_lever(fb, g[eb], b, -L.fx[j], -L.fy[j], -L.fz[j]);
     }
   }
 };
@@ -191,13 +182,13 @@ struct DemSolver::SphereMirrors {  // 3D mirrors per element (spheres, shaped bo
 template <int N>
 struct DemSolver::DiscMirrors {  // plane mode, normal along axis N (kernel_mirrors.hpp)
   static constexpr int U = plane_u(N), V = plane_v(N);
-  DemSolver& s;
+  const ParticleStore& p;
   DiscMirror* g;
   DiscForce* out;
   void pack(std::size_t i) {
-    const double* x = &s.p_.x[3 * i];
-    const double* v = &s.p_.v[3 * i];
-    g[i] = {x[U], x[V], s.p_.radius[i], v[U], v[V], s.p_.omega[3 * i + N]};
+    const double* x = &p.x[3 * i];
+    const double* v = &p.v[3 * i];
+    g[i] = {x[U], x[V], p.radius[i], v[U], v[V], p.omega[3 * i + N]};
   }
   bool touching(std::size_t a, std::size_t b) const {
     const DiscMirror &ga = g[a], &gb = g[b];
@@ -231,30 +222,26 @@ struct DemSolver::DiscMirrors {  // plane mode, normal along axis N (kernel_mirr
 };
 
 void DemSolver::compute_pair_forces(double dt, bool update_history) {
-  const std::size_t n = shaped() ? e_body_.size() : p_.size();
-  if (!disc_mirrors()) {
-    k_geometry_.resize(n);
-    k_motion_.resize(n);
-    // Forces go straight to bodies (shaped mode: element forces with their lever arms, in pair
-    // order, which is canonical as for spheres), so the buffer is one slot per body.
-    k_force_.assign(p_.size(), KernelForce{0, 0, 0, 0, 0, 0});
-    SphereMirrors view{*this, k_geometry_.data(), k_motion_.data(), k_force_.data(), shaped()};
+  entities_.start_forces();
+  if (!entities_.discs()) {
+    SphereMirrors view{p_, entities_, entities_.geometry_mirrors().data(), entities_.motion_mirrors().data(),
+                       entities_.forces().data(), shaped()};
     pair_forces(view, dt, update_history);
     return;
   }
-  k_disc_.resize(n);
-  k_disc_force_.assign(n, DiscForce{0, 0, 0});
+  DiscMirror* g = entities_.disc_mirrors().data();
+  DiscForce* f = entities_.disc_forces().data();
   auto run = [&](auto view) { pair_forces(view, dt, update_history); };
   switch (plane_normal()) {
-    case 0: run(DiscMirrors<0>{*this, k_disc_.data(), k_disc_force_.data()}); break;
-    case 1: run(DiscMirrors<1>{*this, k_disc_.data(), k_disc_force_.data()}); break;
-    default: run(DiscMirrors<2>{*this, k_disc_.data(), k_disc_force_.data()}); break;
+    case 0: run(DiscMirrors<0>{p_, g, f}); break;
+    case 1: run(DiscMirrors<1>{p_, g, f}); break;
+    default: run(DiscMirrors<2>{p_, g, f}); break;
   }
 }
 
 template <class Mirrors>
 void DemSolver::pair_forces(Mirrors& view, double dt, bool update_history) {
-  const std::size_t n = shaped() ? e_body_.size() : p_.size();
+  const std::size_t n = entities_.size();
   const std::size_t np = list_.size();
   const std::int32_t* first = list_.first.data();
   const std::int32_t* second = list_.second.data();
@@ -285,7 +272,7 @@ void DemSolver::pair_forces(Mirrors& view, double dt, bool update_history) {
   }
   touching_.resize(nt);
   if (shaped())
-    for (const auto k : touching_) element_motion(first[k]), element_motion(second[k]);
+    for (const auto k : touching_) entities_.refresh_motion(first[k]), entities_.refresh_motion(second[k]);
   // Pass 2, in blocks: gather the pairs' data into lanes, evaluate the law on all lanes
   // (vectorised, contact_kernel.cpp), then accumulate forces in canonical order.
   constexpr std::size_t B = ContactLanes::width;
@@ -315,59 +302,6 @@ void DemSolver::pair_forces(Mirrors& view, double dt, bool update_history) {
       view.accumulate(L, j, first[k], second[k]);
     }
   }
-}
-
-void DemSolver::compute_wall_forces(double dt) {
-  // Entities are elements (bodies for spheres), read as the kernel mirrors packed this step.
-  const bool sh = shaped();
-  // Walls: bodies near a wall at the last rebuild, in (body, wall) order; same lanes and law.
-  const auto& prims = walls_.primitives();
-  const std::size_t slots = static_cast<std::size_t>(walls_.slots());
-  wall_entry_force_.resize(3 * wall_body_.size());  // every entry is written below
-  ContactLanes& L = lanes_;
-  std::int32_t lane_entry[ContactLanes::width];
-  const ContactCoefficients* sets = coefficient_sets_.data();
-  std::size_t nb = 0;
-  auto flush = [&] {
-    evaluate_wall_contacts(model_.law(), L, nb, dt);
-    for (std::size_t j = 0; j < nb; ++j) {
-      const std::size_t k = static_cast<std::size_t>(lane_entry[j]);
-      const std::size_t i = wall_body_[k];
-      double* h = sh ? &wall_hist_[3 * k] : &p_.wall_history[3 * (i * slots + wall_slot_[k])];
-      h[0] = L.hx[j], h[1] = L.hy[j], h[2] = L.hz[j];
-      add_wall_reaction(i, L, j);
-      double* load = &wall_entry_force_[3 * k];
-      load[0] = -L.fx[j], load[1] = -L.fy[j], load[2] = -L.fz[j];
-    }
-    nb = 0;
-  };
-  for (std::size_t k = 0; k < wall_body_.size(); ++k) {
-    const std::size_t i = wall_body_[k];
-    const std::size_t s = wall_slot_[k];
-    double* h = sh ? &wall_hist_[3 * k] : &p_.wall_history[3 * (i * slots + s)];
-    Vec3 nrm;
-    const KernelGeometry gi = geometry(i);
-    const double ri = gi.r;
-    const double delta = prims[s].overlap(Vec3{gi.x, gi.y, gi.z}, ri, nrm);
-    if (delta <= 0.0) {
-      h[0] = h[1] = h[2] = 0.0;
-      double* load = &wall_entry_force_[3 * k];
-      load[0] = load[1] = load[2] = 0.0;
-      continue;
-    }
-    if (sh) element_motion(i);
-    const KernelMotion mi = motion(i);
-    L.dx[nb] = nrm.x, L.dy[nb] = nrm.y, L.dz[nb] = nrm.z;
-    L.ra[nb] = ri, L.rb[nb] = delta;
-    L.vx[nb] = mi.vx, L.vy[nb] = mi.vy, L.vz[nb] = mi.vz;
-    L.wx[nb] = mi.wx * ri, L.wy[nb] = mi.wy * ri, L.wz[nb] = mi.wz * ri;
-    L.hx[nb] = h[0], L.hy[nb] = h[1], L.hz[nb] = h[2];
-    const ContactCoefficients& cs = sets[wall_coefficient_[k]];
-    L.set_coefficients(nb, cs);
-    lane_entry[nb++] = static_cast<std::int32_t>(k);
-    if (nb == ContactLanes::width) flush();
-  }
-  if (nb) flush();
 }
 
 }  // namespace tessera

@@ -42,14 +42,13 @@ double DemSolver::free_sphere_displacement() const {
 void DemSolver::build_free_sphere_candidates() {
   free_entity_.clear(), free_of_.clear();
   if (free_.empty()) return;
-  const bool sh = shaped();
-  const std::size_t n = sh ? e_owned_ : p_.owned;
+  const std::size_t n = entities_.owned();
   for (std::size_t b = 0; b < free_.size(); ++b) {
     FreeSphere& s = free_[b];
     s.x_build = s.x;
     for (std::size_t e = 0; e < n; ++e) {
-      const Vec3 c = sh ? Vec3{k_geometry_[e].x, k_geometry_[e].y, k_geometry_[e].z} : p_.pos(e);
-      const double reach = s.radius + (sh ? e_r_[e] : p_.radius[e]) + skin_;
+      const Vec3 c = entities_.centre(e);
+      const double reach = s.radius + entities_.radius(e) + skin_;
       if (norm2(c - s.x) < reach * reach) {
         free_entity_.push_back(static_cast<std::int32_t>(e));
         free_of_.push_back(static_cast<std::int32_t>(b));
@@ -75,7 +74,7 @@ void DemSolver::compute_free_sphere_forces(double dt) {
     evaluate_contacts(model_.law(), L, nb, dt);
     for (std::size_t j = 0; j < nb; ++j) {
       mesh_hist_next_[keys[j]] = {L.hx[j], L.hy[j], L.hz[j]};
-      add_wall_reaction(entity[j], L, j);
+      entities_.add_wall_reaction(entity[j], L, j);
       const double rb = L.rb[j];
       mesh_loads_.insert(
           mesh_loads_.end(),
@@ -88,13 +87,13 @@ void DemSolver::compute_free_sphere_forces(double dt) {
     const std::size_t e = static_cast<std::size_t>(free_entity_[k]);
     const int b = free_of_[k];
     const FreeSphere& s = free_[static_cast<std::size_t>(b)];
-    const KernelGeometry ge = geometry(e);
+    const KernelGeometry ge = entities_.geometry(e);
     const double dx = ge.x - s.x.x, dy = ge.y - s.x.y, dz = ge.z - s.x.z;
     const double reach = ge.r + s.radius;
     if (dx * dx + dy * dy + dz * dz >= reach * reach) continue;
-    if (sh) element_motion(e);
-    const KernelMotion me = motion(e);
-    const std::int64_t ekey = sh ? e_key_[e] : p_.order[e];
+    if (sh) entities_.refresh_motion(e);
+    const KernelMotion me = entities_.motion(e);
+    const std::int64_t ekey = entities_.key(e);
     keys[nb] = free_sphere_key(ekey, b);
     const std::array<double, 3> h = spring_or_zero(mesh_hist_, keys[nb]);
     L.dx[nb] = dx, L.dy[nb] = dy, L.dz[nb] = dz;

@@ -124,15 +124,22 @@ void DemSolver::integrate_first_impl() {
   constexpr bool kDiscs = kBodies >= Bodies::discs_x;
   constexpr int normal = kDiscs ? static_cast<int>(kBodies) - static_cast<int>(Bodies::discs_x) : 0;
   constexpr int plane_a = plane_u(normal), plane_b = plane_v(normal);
-  owned_mirrors_current_ = kDiscs ? k_disc_.size() >= n : kSpheres && k_geometry_.size() >= n && k_motion_.size() >= n;
+  auto& geometry_mirrors = entities_.geometry_mirrors();
+  auto& motion_mirrors = entities_.motion_mirrors();
+  auto& disc_mirrors = entities_.disc_mirrors();
+  owned_mirrors_current_ = kDiscs ? disc_mirrors.size() >= n
+                                  : kSpheres && geometry_mirrors.size() >= n && motion_mirrors.size() >= n;
+  KernelGeometry* __restrict kg = geometry_mirrors.data();
+  KernelMotion* __restrict km = motion_mirrors.data();
+  DiscMirror* __restrict kdm = disc_mirrors.data();
   const double* x0 = x_build_.data();
   const double* xm = x_moving_build_.data();
   double moved2 = 0, moved_since_walls2 = 0;
   // A deferred second half-kick (step(true)) comes first, with the forces from the contact buffer.
   const bool both = kSpheres && kick_pending_;
   kick_pending_ = false;
-  const KernelForce* __restrict kf = k_force_.data();
-  const DiscForce* __restrict kd = k_disc_force_.data();
+  const KernelForce* __restrict kf = entities_.forces().data();
+  const DiscForce* __restrict kd = entities_.disc_forces().data();
   for (std::size_t i = 0; i < n; ++i) {
     // The body arrays are page-aligned allocations of equal size: a store to v[j] followed by a
     // load of x[j] would stall (4K aliasing). Load a body's values first, then store.
@@ -166,10 +173,10 @@ void DemSolver::integrate_first_impl() {
     if constexpr (kSpheres) {
       if (owned_mirrors_current_) {
         if constexpr (kDiscs) {
-          k_disc_[i] = {xi[plane_a], xi[plane_b], p_.radius[i], vi[plane_a], vi[plane_b], wi[normal]};
+          kdm[i] = {xi[plane_a], xi[plane_b], p_.radius[i], vi[plane_a], vi[plane_b], wi[normal]};
         } else {
-          k_geometry_[i] = {xi[0], xi[1], xi[2], p_.radius[i]};
-          k_motion_[i] = {vi[0], vi[1], vi[2], wi[0], wi[1], wi[2]};
+          kg[i] = {xi[0], xi[1], xi[2], p_.radius[i]};
+          km[i] = {vi[0], vi[1], vi[2], wi[0], wi[1], wi[2]};
         }
       }
       if constexpr (kDiscs)
@@ -219,7 +226,7 @@ void DemSolver::integrate_second_impl() {
   const double* vmask = velocity_mask_.data();
   const double* wmask = spin_mask_.data();
   for (std::size_t i = 0; i < n; ++i) {
-    const KernelForce in = contact_load(i);
+    const KernelForce in = entities_.load(i);
     const double fi[3] = {in.fx, in.fy, in.fz}, ti[3] = {in.tx, in.ty, in.tz};
     double fa[3] = {fi[0], fi[1], fi[2]}, ta[3] = {ti[0], ti[1], ti[2]};  // what accelerates the body
     if constexpr (kExternal)

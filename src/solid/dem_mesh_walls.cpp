@@ -31,12 +31,9 @@ void DemSolver::build_mesh_candidates() {
   const auto& meshes = walls_.meshes();
   mesh_nodes_build_.resize(meshes.size());
   if (meshes.empty()) return;
-  const bool sh = shaped();
-  const std::size_t n = sh ? e_owned_ : p_.owned;
-  auto centre = [&](std::size_t e) {
-    return sh ? Vec3{k_geometry_[e].x, k_geometry_[e].y, k_geometry_[e].z} : p_.pos(e);
-  };
-  auto radius = [&](std::size_t e) { return sh ? e_r_[e] : p_.radius[e]; };
+  const std::size_t n = entities_.owned();
+  auto centre = [&](std::size_t e) { return entities_.centre(e); };
+  auto radius = [&](std::size_t e) { return entities_.radius(e); };
   double r_max = 0;
   for (std::size_t e = 0; e < n; ++e) r_max = std::max(r_max, radius(e));
   std::vector<int> found;
@@ -121,14 +118,14 @@ void DemSolver::compute_mesh_forces(double dt) {
   for (std::size_t k = 0; k < mesh_entity_.size(); ++k) {
     const std::size_t e = mesh_entity_[k];
     MeshWall& m = meshes[mesh_of_[k]];
-    const KernelGeometry ge = geometry(e);
+    const KernelGeometry ge = entities_.geometry(e);
     const Vec3 c{ge.x, ge.y, ge.z};
     cands.assign(mesh_cands_.begin() + mesh_cand_start_[k], mesh_cands_.begin() + mesh_cand_start_[k + 1]);
     const auto contacts = sphere_mesh_contacts(c, ge.r, m.nodes, m.triangles, cands);
     if (contacts.empty()) continue;
-    if (sh) element_motion(e);
-    const KernelMotion me = motion(e);
-    const std::int64_t ekey = sh ? e_key_[e] : p_.order[e];
+    if (sh) entities_.refresh_motion(e);
+    const KernelMotion me = entities_.motion(e);
+    const std::int64_t ekey = entities_.key(e);
     std::size_t nb = 0;
     std::uint64_t keys[ContactLanes::width];
     Vec3 points[ContactLanes::width];
@@ -150,7 +147,7 @@ void DemSolver::compute_mesh_forces(double dt) {
     evaluate_wall_contacts(model_.law(), L, nb, dt);
     for (std::size_t j = 0; j < nb; ++j) {
       mesh_hist_next_[keys[j]] = {L.hx[j], L.hy[j], L.hz[j]};
-      add_wall_reaction(e, L, j);
+      entities_.add_wall_reaction(e, L, j);
       const Vec3 f{L.fx[j], L.fy[j], L.fz[j]};
       const Vec3 moment = cross(points[j] - m.origin, f);
       loads.insert(loads.end(), {static_cast<double>(keys[j] >> 32), static_cast<double>(keys[j] & 0xffffffffULL),

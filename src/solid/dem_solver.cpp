@@ -45,6 +45,7 @@ DemSettings DemSettings::from_config(const ConfigNode& solid) {
 DemSolver::DemSolver(const Decomposition& decomp, ContactModel model, Walls walls, DemSettings settings)
     : decomp_(decomp), model_(std::move(model)), walls_(std::move(walls)), settings_(settings), halo_(decomp) {
   p_.wall_slots = walls_.slots();
+  entities_.configure(false, settings_.plane_normal);
   if (plane_mode()) {
     const int n = settings_.plane_normal;
     if (decomp.dims()[n] != 1)
@@ -102,6 +103,7 @@ void DemSolver::set_shapes(std::vector<ShapeTemplate> templates) {
     const double lo = std::min({I.x, I.y, I.z}), hi = std::max({I.x, I.y, I.z});
     anisotropic_[k + 1] = hi - lo > 1e-12 * hi;
   }
+  entities_.configure(shaped(), settings_.plane_normal);
   if (shaped()) {
     halo_.forward_orientation = true;
     halo_.key_stride = key_stride_;
@@ -214,43 +216,10 @@ void DemSolver::setup(bool fresh) {
   }
 }
 
-std::vector<Vec3> DemSolver::wall_forces() const {
-  // Exact sums over every contact (core/exact_sum.hpp): a floor's load is the same bits on any
-  // rank count, however the bodies touching it are spread over the ranks.
-  const std::size_t slots = static_cast<std::size_t>(walls_.slots());
-  std::vector<ExactSum> sums(3 * slots);
-  for (std::size_t k = 0; k < wall_slot_.size() && 3 * k < wall_entry_force_.size(); ++k)
-    for (int d = 0; d < 3; ++d) sums[3 * static_cast<std::size_t>(wall_slot_[k]) + d] += wall_entry_force_[3 * k + d];
-  ExactSum::all_reduce(sums, decomp_.comm());
-  std::vector<Vec3> f(slots);
-  for (std::size_t s = 0; s < slots; ++s)
-    f[s] = {sums[3 * s].value(), sums[3 * s + 1].value(), sums[3 * s + 2].value()};
-  return f;
-}
-
-void DemSolver::track_wall_impulse(bool on) {
-  track_wall_impulse_ = on;
-  wall_impulse_ = {};
-}
-
-void DemSolver::add_wall_half_impulse() {
-  for (std::size_t k = 0; 3 * k + 2 < wall_entry_force_.size(); ++k)
-    for (int d = 0; d < 3; ++d) wall_impulse_[d] += -0.5 * dt_ * wall_entry_force_[3 * k + d];
-}
-
-Vec3 DemSolver::wall_impulse() const {
-  std::array<ExactSum, 3> sums = wall_impulse_;
-  ExactSum::all_reduce(sums, decomp_.comm());
-  return {sums[0].value(), sums[1].value(), sums[2].value()};
-}
-
 HistoryMap DemSolver::histories() const {
   HistoryMap h;
   list_.collect(h);
-  for (std::size_t k = 0; k < wall_keys_.size(); ++k) {
-    const double* w = &wall_hist_[3 * k];
-    if (w[0] != 0.0 || w[1] != 0.0 || w[2] != 0.0) h[wall_keys_[k]] = {w[0], w[1], w[2]};
-  }
+  plane_walls_.collect(h);
   for (const auto& [key, w] : mesh_hist_)
     if (w[0] != 0.0 || w[1] != 0.0 || w[2] != 0.0) h[key] = w;
   return h;
@@ -268,20 +237,15 @@ void DemSolver::rebuild() {
     bool any = false;
     for (std::size_t i = 0; i < p_.owned; ++i)
       if (!decomp_.owns(p_.pos(i))) leaving[i] = 1, any = true;
-    // List entries hold elements; an element's body is e_body_ (shaped) or itself.
-    auto body_of = [&](std::int32_t e) { return shaped() ? e_body_[e] : e; };
+    // List entries hold entities (elements of shaped bodies, or bodies).
     if (any) {
       for (std::size_t k = 0; k < list_.size(); ++k) {
         const double* h = &list_.history[3 * k];
-        if ((leaving[body_of(list_.first[k])] || leaving[body_of(list_.second[k])]) &&
+        if ((leaving[entities_.body(list_.first[k])] || leaving[entities_.body(list_.second[k])]) &&
             (h[0] != 0.0 || h[1] != 0.0 || h[2] != 0.0))
           histories[list_.keys[k]] = {h[0], h[1], h[2]};
       }
-      for (std::size_t k = 0; k < wall_keys_.size(); ++k) {
-        const double* h = &wall_hist_[3 * k];
-        if (leaving[body_of(wall_body_[k])] && (h[0] != 0.0 || h[1] != 0.0 || h[2] != 0.0))
-          histories[wall_keys_[k]] = {h[0], h[1], h[2]};
-      }
+      plane_walls_.collect_leaving(entities_, leaving, histories);
       // Mesh-wall springs (few): all of them travel through the map; each rank keeps its own below.
       for (const auto& [key, h] : mesh_hist_) histories.emplace(key, h);
     }
@@ -300,17 +264,19 @@ void DemSolver::rebuild() {
   {
     auto t = timers_.scope("neighbor");
     if (shaped()) {
-      build_elements();
-      e_x_.resize(3 * e_body_.size());
-      for (std::size_t k = 0; k < e_body_.size(); ++k)
-        e_x_[3 * k] = k_geometry_[k].x, e_x_[3 * k + 1] = k_geometry_[k].y, e_x_[3 * k + 2] = k_geometry_[k].z;
+      entities_.layout(shapes_, key_stride_);
+      std::vector<double> e_x(3 * entities_.size());  // the elements' positions at this build
+      for (std::size_t k = 0; k < entities_.size(); ++k) {
+        const Vec3 c = entities_.centre(k);
+        e_x[3 * k] = c.x, e_x[3 * k + 1] = c.y, e_x[3 * k + 2] = c.z;
+      }
       ContactElements e;
-      e.size = e_body_.size();
-      e.owned = e_owned_;
-      e.x = e_x_.data();
-      e.radius = e_r_.data();
-      e.key = e_key_.data();
-      e.body = e_body_.data();
+      e.size = entities_.size();
+      e.owned = entities_.owned();
+      e.x = e_x.data();
+      e.radius = entities_.element_radius().data();
+      e.key = entities_.element_key().data();
+      e.body = entities_.element_body().data();
       e.body_mass = p_.mass.data();
       list_.build(e, skin_, histories);
       q_build_.assign(p_.q.begin(), p_.q.begin() + 4 * static_cast<std::ptrdiff_t>(p_.owned));
@@ -325,9 +291,6 @@ void DemSolver::rebuild() {
     turn_.assign(plane_mode() ? p_.owned : 0, 0.0);
     inv_mass_.resize(p_.owned);
     inv_inertia_.resize(p_.owned);
-    wall_body_.clear();
-    wall_slot_.clear();
-    const auto& prims = walls_.primitives();
     inertia3_.resize(3 * p_.owned);
     for (std::size_t i = 0; i < p_.owned; ++i) {
       inv_mass_[i] = 1.0 / p_.mass[i];
@@ -337,114 +300,10 @@ void DemSolver::rebuild() {
       for (int k = 0; k < 3; ++k)
         inertia3_[3 * i + k] =
             sh > 0 ? p_.mass[i] / shapes_[sh - 1].volume * shapes_[sh - 1].inertia_per_density[k] : p_.inertia[i];
-      if (shaped()) continue;  // walls: per contact sphere, below
-      for (std::size_t s = 0; s < prims.size(); ++s) {
-        Vec3 n;
-        if (prims[s].overlap(p_.pos(i), p_.radius[i] + skin_, n) > 0.0) {
-          wall_body_.push_back(static_cast<std::int32_t>(i));
-          wall_slot_.push_back(static_cast<std::int32_t>(s));
-        }
-      }
     }
-    if (shaped()) build_wall_list_elements(histories);
+    plane_walls_.find(entities_, walls_, skin_, histories);
     x_moving_build_ = x_build_;
     find_moving_candidates();
-  }
-}
-
-void DemSolver::build_elements() {
-  const std::size_t n = p_.size();
-  e_first_.resize(n + 1);
-  e_body_.clear(), e_key_.clear(), e_r_.clear();
-  for (std::size_t i = 0; i < n; ++i) {
-    e_first_[i] = e_body_.size();
-    if (i == p_.owned) e_owned_ = e_body_.size();
-    const int sh = p_.shape[i];
-    const std::size_t count = sh > 0 ? shapes_[sh - 1].spheres.size() : 1;
-    const double r = sh > 0 ? shapes_[sh - 1].sphere_radius : p_.radius[i];
-    for (std::size_t k = 0; k < count; ++k) {
-      e_body_.push_back(static_cast<std::int32_t>(i));
-      e_key_.push_back(p_.order[i] * key_stride_ + static_cast<std::int64_t>(k));
-      e_r_.push_back(r);
-    }
-  }
-  e_first_[n] = e_body_.size();
-  if (n == p_.owned) e_owned_ = e_body_.size();
-  k_geometry_.resize(e_body_.size());
-  k_motion_.resize(e_body_.size());
-  update_elements(0, n);
-}
-
-void DemSolver::update_elements(std::size_t first_body, std::size_t end_body) {
-  // Element e of body i: arm = R(q) c_e, x_e = x + arm, written to the kernel mirror (the elements'
-  // only per-step storage). Velocities are made only for elements in contact (element_motion).
-  KernelGeometry* __restrict g = k_geometry_.data();
-  for (std::size_t i = first_body; i < end_body; ++i) {
-    const int sh = p_.shape[i];
-    const double x = p_.x[3 * i], y = p_.x[3 * i + 1], z = p_.x[3 * i + 2];
-    const std::size_t e0 = e_first_[i], e1 = e_first_[i + 1];
-    if (sh == 0) {
-      g[e0] = {x, y, z, e_r_[e0]};
-      continue;
-    }
-    const double qw = p_.q[4 * i], qx = p_.q[4 * i + 1], qy = p_.q[4 * i + 2], qz = p_.q[4 * i + 3];
-    // R(q) for a unit quaternion.
-    const double r00 = 1 - 2 * (qy * qy + qz * qz), r01 = 2 * (qx * qy - qw * qz), r02 = 2 * (qx * qz + qw * qy);
-    const double r10 = 2 * (qx * qy + qw * qz), r11 = 1 - 2 * (qx * qx + qz * qz), r12 = 2 * (qy * qz - qw * qx);
-    const double r20 = 2 * (qx * qz - qw * qy), r21 = 2 * (qy * qz + qw * qx), r22 = 1 - 2 * (qx * qx + qy * qy);
-    const Vec3* c = shapes_[sh - 1].spheres.data();
-    const double r = shapes_[sh - 1].sphere_radius;
-    for (std::size_t e = e0; e < e1; ++e, ++c) {
-      const double ax = r00 * c->x + r01 * c->y + r02 * c->z;
-      const double ay = r10 * c->x + r11 * c->y + r12 * c->z;
-      const double az = r20 * c->x + r21 * c->y + r22 * c->z;
-      g[e] = {x + ax, y + ay, z + az, r};
-    }
-  }
-}
-
-void DemSolver::element_motion(std::size_t e) {
-  // v_e = v + w x (x_e - x), w: the velocity of contact sphere e from its body's.
-  const std::size_t i = static_cast<std::size_t>(e_body_[e]);
-  const KernelGeometry& g = k_geometry_[e];
-  const double ax = g.x - p_.x[3 * i], ay = g.y - p_.x[3 * i + 1], az = g.z - p_.x[3 * i + 2];
-  const double wx = p_.omega[3 * i], wy = p_.omega[3 * i + 1], wz = p_.omega[3 * i + 2];
-  k_motion_[e] = {p_.v[3 * i] + (wy * az - wz * ay),
-                  p_.v[3 * i + 1] + (wz * ax - wx * az),
-                  p_.v[3 * i + 2] + (wx * ay - wy * ax),
-                  wx,
-                  wy,
-                  wz};
-}
-
-void DemSolver::build_wall_list_elements(const HistoryMap& extra) {
-  // (element, wall) entries within reach, in key order (owned elements are in key order), each
-  // with its history from the previous list (merge of sorted keys), else from `extra`, else zero.
-  std::vector<PairKey> old_keys;
-  std::vector<double> old_hist;
-  old_keys.swap(wall_keys_);
-  old_hist.swap(wall_hist_);
-  wall_body_.clear(), wall_slot_.clear();
-  const auto& prims = walls_.primitives();
-  std::size_t old = 0;
-  for (std::size_t e = 0; e < e_owned_; ++e) {
-    const Vec3 xe{k_geometry_[e].x, k_geometry_[e].y, k_geometry_[e].z};
-    for (std::size_t s = 0; s < prims.size(); ++s) {
-      Vec3 n;
-      if (prims[s].overlap(xe, e_r_[e] + skin_, n) <= 0.0) continue;
-      const PairKey key = wall_key(e_key_[e], static_cast<int>(s));
-      wall_body_.push_back(static_cast<std::int32_t>(e));
-      wall_slot_.push_back(static_cast<std::int32_t>(s));
-      wall_keys_.push_back(key);
-      std::array<double, 3> h{0, 0, 0};
-      while (old < old_keys.size() && old_keys[old] < key) ++old;
-      if (old < old_keys.size() && old_keys[old] == key) {
-        h = {old_hist[3 * old], old_hist[3 * old + 1], old_hist[3 * old + 2]};
-      } else if (const auto it = extra.find(key); it != extra.end()) {
-        h = it->second;
-      }
-      wall_hist_.insert(wall_hist_.end(), h.begin(), h.end());
-    }
   }
 }
 
@@ -501,12 +360,12 @@ void DemSolver::find_moving_candidates() {
 }
 
 void DemSolver::step(bool defer_kick) {
-  if (track_wall_impulse_) add_wall_half_impulse();  // the first half-kick's wall forces
+  if (plane_walls_.tracking_impulse()) plane_walls_.add_half_impulse(dt_);  // the first half-kick's wall forces
   {
     auto t = timers_.scope("integrate");
     integrate_first();
     kick_free_spheres(true);
-    if (shaped()) update_elements(0, p_.owned);
+    if (shaped()) entities_.place(shapes_, 0, p_.owned);
     for (auto& m : walls_.meshes()) {
       if (m.motion == MeshWall::Motion::pivot) m.theta_dot += 0.5 * dt_ * m.theta_ddot;
       m.advance(dt_);
@@ -518,12 +377,12 @@ void DemSolver::step(bool defer_kick) {
     {
       auto t = timers_.scope("ghost_comm");
       halo_.forward(p_);
-      if (shaped()) update_elements(p_.owned, p_.size());
+      if (shaped()) entities_.place(shapes_, p_.owned, p_.size());
     }
     if (refresh_moving_) refresh_moving_candidates();
   }
   compute_forces(true);
-  if (track_wall_impulse_) add_wall_half_impulse();  // the second's
+  if (plane_walls_.tracking_impulse()) plane_walls_.add_half_impulse(dt_);  // the second's
   {
     auto t = timers_.scope("integrate");
     if (defer_kick && !shaped())

@@ -31,14 +31,15 @@
 #include "core/decomposition.hpp"
 #include "core/exact_sum.hpp"
 #include "core/timers.hpp"
+#include "solid/contact_entities.hpp"
 #include "solid/contact_history.hpp"
 #include "solid/contact_kernel.hpp"
 #include "solid/contact_model.hpp"
-#include "solid/kernel_mirrors.hpp"
 #include "solid/free_spheres.hpp"
 #include "solid/halo.hpp"
 #include "solid/neighbor_list.hpp"
 #include "solid/particles.hpp"
+#include "solid/plane_wall_contacts.hpp"
 #include "solid/rigid_rotation.hpp"
 #include "solid/shape.hpp"
 #include "solid/walls.hpp"
@@ -76,6 +77,8 @@ struct DemStats {
 class DemSolver {
  public:
   DemSolver(const Decomposition& decomp, ContactModel model, Walls walls, DemSettings settings);
+  DemSolver(const DemSolver&) = delete;  // its stages hold references to its body store
+  DemSolver& operator=(const DemSolver&) = delete;
 
   ParticleStore& particles() { return p_; }
   // Plane mode: the discs' orientations (q) are brought up to date at each list rebuild and by
@@ -160,12 +163,12 @@ class DemSolver {
   DemStats stats() const;  // collective
   // Collective: total force of all bodies on each wall primitive at the last force evaluation,
   // summed exactly (the same bits on any rank count).
-  std::vector<Vec3> wall_forces() const;
+  std::vector<Vec3> wall_forces() const { return plane_walls_.loads(walls_, decomp_.comm()); }
   // The impulse the planar walls gave the owned bodies over the steps since track_wall_impulse(true)
   // (N s; collective, summed exactly): per step dt/2 (F_n + F_n+1), as the integrator's two
   // half-kicks apply the wall forces. Free spheres and mesh walls are not counted.
-  void track_wall_impulse(bool on);
-  Vec3 wall_impulse() const;
+  void track_wall_impulse(bool on) { plane_walls_.track_impulse(on); }
+  Vec3 wall_impulse() const { return plane_walls_.impulse(decomp_.comm()); }
   // Contact histories of touching pairs (this rank's list; pairs with an owned body).
   HistoryMap histories() const;
   std::size_t list_builds() const { return list_.builds; }
@@ -201,7 +204,6 @@ class DemSolver {
   struct DiscMirrors;
   template <class Mirrors>
   void pair_forces(Mirrors& mirrors, double dt, bool update_history);
-  void compute_wall_forces(double dt);
   void store_forces();
   void fill_coefficients();  // the law's coefficients of every pair and wall contact in the lists
   template <class Law>
@@ -215,11 +217,6 @@ class DemSolver {
   void integrate_second_impl();
   void apply_pending_kick();
   bool external_loads_ = false;
-  // Shaped mode: element arrays of every local body (after ghosts), and their positions/mirrors.
-  void build_elements();
-  void update_elements(std::size_t first_body, std::size_t end_body);
-  void build_wall_list_elements(const HistoryMap& extra);
-  void element_motion(std::size_t e);
   // Triangle-mesh walls (T14): candidates at rebuild, forces each step, motion.
   void build_mesh_candidates();
   // Only the moving walls moved far enough: their candidates again, the pair list kept.
@@ -246,65 +243,16 @@ class DemSolver {
   double plane_position_ = 0;
   std::array<double, 3> velocity_mask_{1, 1, 1}, spin_mask_{1, 1, 1};
   ParticleStore p_;
+  ContactEntities entities_{p_};  // bodies or their contact spheres; kernel mirrors, contact buffer
+  PlaneWallContacts plane_walls_;
   NeighborList list_;
   Halo halo_;
   HistoryMap pending_;
   PhaseTimers timers_;
   std::vector<double> x_build_;
   std::vector<double> inv_mass_, inv_inertia_;  // owned bodies, refreshed at each rebuild
-  // (body, wall slot) pairs within reach of a wall at the last rebuild: no other body can touch a
-  // wall before the next one (static walls; bodies move less than skin/2 in between).
-  std::vector<std::int32_t> wall_body_, wall_slot_, wall_coefficient_;  // + index into coefficient_sets_
-  // Kernel mirrors of the body arrays and the contact buffer (kernel_mirrors.hpp): 3D mirrors per
-  // element, or (disc_mirrors(): plane mode, spheres) one disc mirror and disc force slot per body.
-  std::vector<KernelGeometry> k_geometry_;
-  std::vector<KernelMotion> k_motion_;
-  std::vector<KernelForce> k_force_;  // per local body
-  std::vector<DiscMirror> k_disc_;
-  std::vector<DiscForce> k_disc_force_;  // per local body
-  bool disc_mirrors() const { return plane_mode() && !shaped(); }
-  // Element e's geometry and motion as the contacts of walls, meshes and free spheres read them
-  // (the same values as the mirrors': a disc's from the body arrays).
-  KernelGeometry geometry(std::size_t e) const {
-    if (!disc_mirrors()) return k_geometry_[e];
-    return {p_.x[3 * e], p_.x[3 * e + 1], p_.x[3 * e + 2], p_.radius[e]};
-  }
-  KernelMotion motion(std::size_t e) const {
-    if (!disc_mirrors()) return k_motion_[e];
-    const double *v = &p_.v[3 * e], *w = &p_.omega[3 * e];
-    return {v[0], v[1], v[2], w[0], w[1], w[2]};
-  }
-  // The contact buffer's total on body i as a 3D force and torque.
-  KernelForce contact_load(std::size_t i) const {
-    if (!disc_mirrors()) return k_force_[i];
-    double f[6] = {0, 0, 0, 0, 0, 0};
-    const int n = plane_normal();
-    const DiscForce& d = k_disc_force_[i];
-    f[plane_u(n)] = d.fu, f[plane_v(n)] = d.fv, f[3 + n] = d.tn;
-    return {f[0], f[1], f[2], f[3], f[4], f[5]};
-  }
-  // A wall-type contact's force (lane j: force and n x force) on the body of element e, with the
-  // lever-arm torque in shaped mode.
-  void add_wall_reaction(std::size_t e, const ContactLanes& L, std::size_t j) {
-    if (disc_mirrors()) {
-      const int n = plane_normal();
-      const double* f[3] = {L.fx, L.fy, L.fz};
-      const double* nf[3] = {L.nx, L.ny, L.nz};
-      DiscForce& fo = k_disc_force_[e];
-      fo.fu += f[plane_u(n)][j], fo.fv += f[plane_v(n)][j];
-      fo.tn -= nf[n][j] * L.ra[j];
-      return;
-    }
-    const std::size_t body = shaped() ? static_cast<std::size_t>(e_body_[e]) : e;
-    KernelForce& fo = k_force_[body];
-    fo.fx += L.fx[j], fo.fy += L.fy[j], fo.fz += L.fz[j];
-    fo.tx -= L.nx[j] * L.ra[j], fo.ty -= L.ny[j] * L.ra[j], fo.tz -= L.nz[j] * L.ra[j];
-    if (shaped()) add_lever(fo, k_geometry_[e], body, L.fx[j], L.fy[j], L.fz[j]);
-  }
-  // Shaped mode: adds the torque (x_e - x_body) x F of an element force to the body's slot.
-  void add_lever(KernelForce& f, const KernelGeometry& g, std::size_t body, double fx, double fy, double fz) const;
   void fold_turns();
-  bool kick_pending_ = false;           // step(true): the second half-kick waits in k_force_ (see step)
+  bool kick_pending_ = false;           // step(true): the second half-kick waits in the contact buffer
   std::vector<double> turn_;            // plane mode: each owned disc's turn about the normal since fold_turns
   double moved2_[2] = {0, 0};           // sphere bodies: squared largest displacements (see needs_rebuild)
   bool owned_mirrors_current_ = false;  // the owned bodies' mirrors packed by integrate_first
@@ -317,25 +265,13 @@ class DemSolver {
   // previous evaluation that advanced the histories.
   std::vector<std::int32_t> touching_;
   std::vector<std::uint8_t> was_touching_;
-  void add_wall_half_impulse();  // dt/2 times the walls' push on the owned bodies now
-  bool track_wall_impulse_ = false;
-  std::array<ExactSum, 3> wall_impulse_;
-  std::vector<double> wall_entry_force_;  // 3 per wall entry: the body's force on the wall
   // Shaped mode.
   std::vector<ShapeTemplate> shapes_;
   std::vector<char> anisotropic_;  // per shape id: principal moments differ (DLM rotation)
   std::int64_t key_stride_ = 1;
-  std::vector<std::int32_t> e_body_;  // local body of each element
-  std::vector<std::int64_t> e_key_;
-  std::vector<double> e_x_, e_r_;     // position at the last build (3 per element), radius
-  std::vector<std::size_t> e_first_;  // per local body: its first element (size bodies + 1)
-  std::size_t e_owned_ = 0;
-  bool e_forces_clear_ = false;     // k_force_ holds zeros in every slot (shaped mode)
   std::vector<double> q_build_;     // owned bodies' orientations at the last build (shaped mode)
   std::vector<double> arm_;         // per shape: the farthest contact-sphere centre from the body's
   std::vector<double> inertia3_;    // owned bodies: principal moments (3 each)
-  std::vector<PairKey> wall_keys_;  // per wall entry (wall_body_ then holds the element)
-  std::vector<double> wall_hist_;   // 3 per wall entry
   // Mesh walls: (entity, mesh) pairs within reach at the last rebuild, their candidate triangles,
   // coefficients; tangential histories by (element key, mesh, contact ordinal).
   std::vector<std::int32_t> mesh_entity_, mesh_of_, mesh_cand_start_, mesh_cands_, mesh_coefficient_;

@@ -41,10 +41,10 @@ DemStats DemSolver::stats() const {
   }
   // Contacts between elements (bodies for spheres): positions and radii of elements.
   const bool sh = shaped();
-  auto ex = [&](std::size_t a) { return sh ? Vec3{k_geometry_[a].x, k_geometry_[a].y, k_geometry_[a].z} : p_.pos(a); };
-  auto er = [&](std::size_t a) { return sh ? e_r_[a] : p_.radius[a]; };
-  auto eid = [&](std::size_t a) { return p_.id[sh ? static_cast<std::size_t>(e_body_[a]) : a]; };
-  const std::size_t owned_elements = sh ? e_owned_ : p_.owned;
+  auto ex = [&](std::size_t a) { return entities_.centre(a); };
+  auto er = [&](std::size_t a) { return entities_.radius(a); };
+  auto eid = [&](std::size_t a) { return p_.id[entities_.body(a)]; };
+  const std::size_t owned_elements = entities_.owned();
   std::unordered_set<PairKey> touching_bodies;
   for (std::size_t k = 0; k < list_.size(); ++k) {
     const auto a = static_cast<std::size_t>(list_.first[k]), b = static_cast<std::size_t>(list_.second[k]);
@@ -56,7 +56,7 @@ DemStats DemSolver::stats() const {
       note_overlap(rs - r, std::min(er(a), er(b)), eid(a));
       // Body pairs: a body's element keys all precede a higher-order body's, so the lower element's
       // body is the pair's lower body and its owner counts the pair.
-      if (sh) touching_bodies.insert(pair_key(p_.order[e_body_[a]], p_.order[e_body_[b]]));
+      if (sh) touching_bodies.insert(pair_key(p_.order[entities_.body(a)], p_.order[entities_.body(b)]));
     }
   }
   c[4] = sh ? static_cast<long>(touching_bodies.size()) : c[1];

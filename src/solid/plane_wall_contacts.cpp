@@ -1,0 +1,134 @@
+// SPDX-License-Identifier: MIT
+#include "solid/plane_wall_contacts.hpp"
+
+namespace tessera {
+
+void PlaneWallContacts::find(const ContactEntities& entities, const Walls& walls, double skin,
+                             const HistoryMap& extra) {
+  std::vector<PairKey> old_keys;
+  std::vector<double> old_hist;
+  old_keys.swap(keys_);
+  old_hist.swap(hist_);
+  entity_.clear(), slot_.clear();
+  const auto& prims = walls.primitives();
+  const bool sh = entities.shaped();
+  std::size_t old = 0;
+  for (std::size_t e = 0; e < entities.owned(); ++e) {
+    const Vec3 xe = entities.centre(e);
+    for (std::size_t s = 0; s < prims.size(); ++s) {
+      Vec3 n;
+      if (prims[s].overlap(xe, entities.radius(e) + skin, n) <= 0.0) continue;
+      entity_.push_back(static_cast<std::int32_t>(e));
+      slot_.push_back(static_cast<std::int32_t>(s));
+      if (!sh) continue;  // sphere bodies: the spring is in the body's wall_history
+      const PairKey key = wall_key(entities.key(e), static_cast<int>(s));
+      keys_.push_back(key);
+      std::array<double, 3> h{0, 0, 0};
+      while (old < old_keys.size() && old_keys[old] < key) ++old;
+      if (old < old_keys.size() && old_keys[old] == key) {
+        h = {old_hist[3 * old], old_hist[3 * old + 1], old_hist[3 * old + 2]};
+      } else if (const auto it = extra.find(key); it != extra.end()) {
+        h = it->second;
+      }
+      hist_.insert(hist_.end(), h.begin(), h.end());
+    }
+  }
+}
+
+void PlaneWallContacts::forces(ContactEntities& entities, ParticleStore& bodies, const Walls& walls,
+                               ContactLanes& L, const ContactCoefficients* sets, LawKind law, double dt) {
+  // Entries in (entity, wall) order; entities read as the kernel mirrors packed this step.
+  const bool sh = entities.shaped();
+  const auto& prims = walls.primitives();
+  const std::size_t slots = static_cast<std::size_t>(walls.slots());
+  entry_force_.resize(3 * entity_.size());  // every entry is written below
+  std::int32_t lane_entry[ContactLanes::width];
+  auto spring = [&](std::size_t k) {
+    return sh ? &hist_[3 * k] : &bodies.wall_history[3 * (entity_[k] * slots + slot_[k])];
+  };
+  std::size_t nb = 0;
+  auto flush = [&] {
+    evaluate_wall_contacts(law, L, nb, dt);
+    for (std::size_t j = 0; j < nb; ++j) {
+      const std::size_t k = static_cast<std::size_t>(lane_entry[j]);
+      double* h = spring(k);
+      h[0] = L.hx[j], h[1] = L.hy[j], h[2] = L.hz[j];
+      entities.add_wall_reaction(entity_[k], L, j);
+      double* load = &entry_force_[3 * k];
+      load[0] = -L.fx[j], load[1] = -L.fy[j], load[2] = -L.fz[j];
+    }
+    nb = 0;
+  };
+  for (std::size_t k = 0; k < entity_.size(); ++k) {
+    const std::size_t i = entity_[k];
+    double* h = spring(k);
+    Vec3 nrm;
+    const KernelGeometry gi = entities.geometry(i);
+    const double ri = gi.r;
+    const double delta = prims[slot_[k]].overlap(Vec3{gi.x, gi.y, gi.z}, ri, nrm);
+    if (delta <= 0.0) {
+      h[0] = h[1] = h[2] = 0.0;
+      double* load = &entry_force_[3 * k];
+      load[0] = load[1] = load[2] = 0.0;
+      continue;
+    }
+    if (sh) entities.refresh_motion(i);
+    const KernelMotion mi = entities.motion(i);
+    L.dx[nb] = nrm.x, L.dy[nb] = nrm.y, L.dz[nb] = nrm.z;
+    L.ra[nb] = ri, L.rb[nb] = delta;
+    L.vx[nb] = mi.vx, L.vy[nb] = mi.vy, L.vz[nb] = mi.vz;
+    L.wx[nb] = mi.wx * ri, L.wy[nb] = mi.wy * ri, L.wz[nb] = mi.wz * ri;
+    L.hx[nb] = h[0], L.hy[nb] = h[1], L.hz[nb] = h[2];
+    L.set_coefficients(nb, sets[coefficient_[k]]);
+    lane_entry[nb++] = static_cast<std::int32_t>(k);
+    if (nb == ContactLanes::width) flush();
+  }
+  if (nb) flush();
+}
+
+std::vector<Vec3> PlaneWallContacts::loads(const Walls& walls, MPI_Comm comm) const {
+  // Exact sums over every contact (core/exact_sum.hpp): a floor's load is the same bits on any
+  // rank count, however the bodies touching it are spread over the ranks.
+  const std::size_t slots = static_cast<std::size_t>(walls.slots());
+  std::vector<ExactSum> sums(3 * slots);
+  for (std::size_t k = 0; k < slot_.size() && 3 * k < entry_force_.size(); ++k)
+    for (int d = 0; d < 3; ++d) sums[3 * static_cast<std::size_t>(slot_[k]) + d] += entry_force_[3 * k + d];
+  ExactSum::all_reduce(sums, comm);
+  std::vector<Vec3> f(slots);
+  for (std::size_t s = 0; s < slots; ++s) f[s] = {sums[3 * s].value(), sums[3 * s + 1].value(), sums[3 * s + 2].value()};
+  return f;
+}
+
+void PlaneWallContacts::track_impulse(bool on) {
+  track_impulse_ = on;
+  impulse_ = {};
+}
+
+void PlaneWallContacts::add_half_impulse(double dt) {
+  for (std::size_t k = 0; 3 * k + 2 < entry_force_.size(); ++k)
+    for (int d = 0; d < 3; ++d) impulse_[d] += -0.5 * dt * entry_force_[3 * k + d];
+}
+
+Vec3 PlaneWallContacts::impulse(MPI_Comm comm) const {
+  std::array<ExactSum, 3> sums = impulse_;
+  ExactSum::all_reduce(sums, comm);
+  return {sums[0].value(), sums[1].value(), sums[2].value()};
+}
+
+void PlaneWallContacts::collect(HistoryMap& h) const {
+  for (std::size_t k = 0; k < keys_.size(); ++k) {
+    const double* w = &hist_[3 * k];
+    if (w[0] != 0.0 || w[1] != 0.0 || w[2] != 0.0) h[keys_[k]] = {w[0], w[1], w[2]};
+  }
+}
+
+void PlaneWallContacts::collect_leaving(const ContactEntities& entities, const std::vector<char>& leaving,
+                                        HistoryMap& h) const {
+  for (std::size_t k = 0; k < keys_.size(); ++k) {
+    const double* w = &hist_[3 * k];
+    if (leaving[entities.body(entity_[k])] && (w[0] != 0.0 || w[1] != 0.0 || w[2] != 0.0))
+      h[keys_[k]] = {w[0], w[1], w[2]};
+  }
+}
+
+}  // namespace tessera
