@@ -31,6 +31,8 @@ class ContactEntities {
   void configure(bool shaped, int plane_normal) { shaped_ = shaped, normal_ = shaped ? -1 : plane_normal; }
   bool shaped() const { return shaped_; }
   bool discs() const { return normal_ >= 0; }
+  int plane_normal() const { return normal_; }  // discs: the plane's normal axis
+  const ParticleStore& bodies() const { return p_; }
 
   // Shaped mode, after a rebuild (ghosts in place): the elements of every local body, placed.
   void layout(const std::vector<ShapeTemplate>& shapes, std::int64_t key_stride);

@@ -47,6 +47,9 @@ inline std::array<double, 3> spring_or_zero(const HistoryMap& h, PairKey key) {
   return it == h.end() ? std::array<double, 3>{0, 0, 0} : it->second;
 }
 inline bool is_mesh_key(PairKey k) { return key_high(k) >= kWallKeyBase + kMaxWallSlots; }
+inline bool is_free_sphere_key(PairKey k) {
+  return key_high(k) >= kWallKeyBase + kMaxWallSlots + kMeshContactsPerSphere * kMaxMeshWalls;
+}
 static_assert(kMaxWallSlots + kMeshContactsPerSphere * kMaxMeshWalls + kMaxFreeSpheres <= 1024);
 
 }  // namespace tessera

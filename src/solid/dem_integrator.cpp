@@ -262,6 +262,29 @@ void DemSolver::rotate_shaped(std::size_t i, const double* torque, double h, dou
   p_.q[4 * i] = q.w, p_.q[4 * i + 1] = q.x, p_.q[4 * i + 2] = q.y, p_.q[4 * i + 3] = q.z;
 }
 
+void DemSolver::kick_free_spheres(bool drift) {
+  // Half-kick (and, after the first, the drift) of velocity Verlet, masked as the grains' are.
+  const double h = 0.5 * dt_;
+  const Vec3 vmask{velocity_mask_[0], velocity_mask_[1], velocity_mask_[2]};
+  const Vec3 wmask{spin_mask_[0], spin_mask_[1], spin_mask_[2]};
+  for (auto& s : free_.spheres()) {
+    s.v = hadamard(s.v + (s.force / s.mass + settings_.gravity) * h, vmask);
+    s.omega = hadamard(s.omega + s.torque * (h / s.inertia), wmask);
+    if (drift) s.x += s.v * dt_;
+  }
+}
+
+void DemSolver::kick_pivots(bool second) {
+  // A pivot mesh's angle (T14): theta' += dt/2 theta'' in both halves; the second half first takes
+  // theta'' from the step's loads.
+  for (auto& m : walls_.meshes()) {
+    if (second) m.update_acceleration(settings_.gravity);
+    if (m.motion != MeshWall::Motion::pivot) continue;
+    m.theta_dot += 0.5 * dt_ * m.theta_ddot;
+    if (second) m.omega = m.axis * m.theta_dot;
+  }
+}
+
 void DemSolver::apply_pending_kick() {
   if (!kick_pending_) return;
   auto t = timers_.scope("integrate");

@@ -130,6 +130,27 @@ void DemSolver::add_body(std::int64_t id, int material, int shape, const Vec3& x
   p_.owned = p_.size();
 }
 
+void DemSolver::add_free_sphere(const std::string& key, int material, double radius, const Vec3& x, const Vec3& v,
+                                const Vec3& omega, double density) {
+  if (!(radius > 0)) throw InputError(key + ".radius", std::to_string(radius), "a positive radius");
+  const double rho = density > 0 ? density : model_.materials()[material].density;
+  FreeSphere s;
+  s.key = key, s.material = material, s.radius = radius, s.x = x, s.v = v, s.omega = omega;
+  if (plane_mode()) {
+    const int n = settings_.plane_normal;
+    s.x[n] = plane_position_, s.v[n] = 0;
+    for (int k = 0; k < 3; ++k)
+      if (k != n) s.omega[k] = 0;
+    s.mass = rho * std::numbers::pi * radius * radius * settings_.plane_thickness;
+    s.inertia = 0.5 * s.mass * radius * radius;
+  } else {
+    s.mass = rho * 4.0 / 3.0 * std::numbers::pi * radius * radius * radius;
+    s.inertia = 0.4 * s.mass * radius * radius;
+  }
+  s.x_build = s.x;
+  free_.add(s);
+}
+
 void DemSolver::setup(bool fresh) {
   MPI_Comm comm = decomp_.comm();
   double local[3] = {1e300, 1e300, 0};  // min mass, min radius, -max radius
@@ -168,7 +189,7 @@ void DemSolver::setup(bool fresh) {
       if (!model_.has_pair(a, b))
         throw InputError("solid.contact.pairs", "", "an entry for every material pair in use");
   walls_.check_pairs(model_, body_materials);
-  for (const auto& f : free_) {
+  for (const auto& f : free_.spheres()) {
     for (int a : body_materials)
       if (!model_.has_pair(a, f.material))
         throw InputError("solid.contact.pairs", "",
@@ -207,21 +228,22 @@ void DemSolver::setup(bool fresh) {
   rebuild();
   if (fresh) {
     // Forces of the initial state for the first half-kick; histories must not advance here.
-    const std::vector<double> pair_history = list_.history, wall_history = p_.wall_history;
+    const std::vector<double> pair_history = pairs_.list().history, wall_history = p_.wall_history;
     compute_forces(false);
     store_forces();
     for (auto& m : walls_.meshes()) m.update_acceleration(settings_.gravity);
-    list_.history = pair_history;
+    pairs_.list().history = pair_history;
     p_.wall_history = wall_history;
   }
 }
 
 HistoryMap DemSolver::histories() const {
   HistoryMap h;
-  list_.collect(h);
+  pairs_.list().collect(h);
   plane_walls_.collect(h);
-  for (const auto& [key, w] : mesh_hist_)
-    if (w[0] != 0.0 || w[1] != 0.0 || w[2] != 0.0) h[key] = w;
+  for (const HistoryMap* springs : {&mesh_walls_.springs(), &free_.grain_springs()})
+    for (const auto& [key, w] : *springs)
+      if (w[0] != 0.0 || w[1] != 0.0 || w[2] != 0.0) h[key] = w;
   return h;
 }
 
@@ -239,15 +261,17 @@ void DemSolver::rebuild() {
       if (!decomp_.owns(p_.pos(i))) leaving[i] = 1, any = true;
     // List entries hold entities (elements of shaped bodies, or bodies).
     if (any) {
-      for (std::size_t k = 0; k < list_.size(); ++k) {
-        const double* h = &list_.history[3 * k];
-        if ((leaving[entities_.body(list_.first[k])] || leaving[entities_.body(list_.second[k])]) &&
+      for (std::size_t k = 0; k < pairs_.list().size(); ++k) {
+        const double* h = &pairs_.list().history[3 * k];
+        if ((leaving[entities_.body(pairs_.list().first[k])] || leaving[entities_.body(pairs_.list().second[k])]) &&
             (h[0] != 0.0 || h[1] != 0.0 || h[2] != 0.0))
-          histories[list_.keys[k]] = {h[0], h[1], h[2]};
+          histories[pairs_.list().keys[k]] = {h[0], h[1], h[2]};
       }
       plane_walls_.collect_leaving(entities_, leaving, histories);
-      // Mesh-wall springs (few): all of them travel through the map; each rank keeps its own below.
-      for (const auto& [key, h] : mesh_hist_) histories.emplace(key, h);
+      // Mesh-wall and free-sphere springs (few): all of them travel through the map; each rank
+      // keeps its own below.
+      for (const auto& [key, h] : mesh_walls_.springs()) histories.emplace(key, h);
+      for (const auto& [key, h] : free_.grain_springs()) histories.emplace(key, h);
     }
   }
   {
@@ -256,7 +280,10 @@ void DemSolver::rebuild() {
     sort_owned_by_order(p_);
   }
   for (const auto& [key, h] : histories)
-    if (is_mesh_key(key)) mesh_hist_.emplace(key, h);
+    if (is_free_sphere_key(key))
+      free_.adopt(key, h);
+    else if (is_mesh_key(key))
+      mesh_walls_.adopt(key, h);
   {
     auto t = timers_.scope("ghost_comm");
     halo_.build_ghosts(p_, r_max_ + skin_);
@@ -278,15 +305,12 @@ void DemSolver::rebuild() {
       e.key = entities_.element_key().data();
       e.body = entities_.element_body().data();
       e.body_mass = p_.mass.data();
-      list_.build(e, skin_, histories);
+      pairs_.list().build(e, skin_, histories);
       q_build_.assign(p_.q.begin(), p_.q.begin() + 4 * static_cast<std::ptrdiff_t>(p_.owned));
     } else {
-      list_.build(p_, skin_, histories);
+      pairs_.list().build(p_, skin_, histories);
     }
-    was_touching_.resize(list_.size());
-    for (std::size_t k = 0; k < list_.size(); ++k)
-      was_touching_[k] =
-          list_.history[3 * k] != 0.0 || list_.history[3 * k + 1] != 0.0 || list_.history[3 * k + 2] != 0.0;
+    pairs_.start_list();
     x_build_.assign(p_.x.begin(), p_.x.begin() + 3 * static_cast<std::ptrdiff_t>(p_.owned));
     turn_.assign(plane_mode() ? p_.owned : 0, 0.0);
     inv_mass_.resize(p_.owned);
@@ -341,7 +365,7 @@ bool DemSolver::needs_rebuild() {
   // their displacements (the same on every rank). The pair list is rebuilt only when the bodies
   // moved skin/2; when only a wall did, its candidate lists are found again (sphere bodies) or
   // everything is rebuilt (shaped bodies).
-  const bool walls_moved = std::sqrt(max2[1]) + std::max(mesh_displacement(), free_sphere_displacement()) > 0.5 * skin_;
+  const bool walls_moved = std::sqrt(max2[1]) + std::max(mesh_walls_.displacement(walls_.meshes()), free_.displacement()) > 0.5 * skin_;
   if (max2[0] > 0.25 * skin_ * skin_ || (walls_moved && shaped())) return true;
   refresh_moving_ = walls_moved;
   return false;
@@ -354,8 +378,8 @@ void DemSolver::refresh_moving_candidates() {
 }
 
 void DemSolver::find_moving_candidates() {
-  build_mesh_candidates();
-  build_free_sphere_candidates();
+  mesh_walls_.find(entities_, walls_.meshes(), skin_);
+  free_.find(entities_, skin_);
   fill_coefficients();
 }
 
@@ -365,11 +389,9 @@ void DemSolver::step(bool defer_kick) {
     auto t = timers_.scope("integrate");
     integrate_first();
     kick_free_spheres(true);
+    kick_pivots(false);
     if (shaped()) entities_.place(shapes_, 0, p_.owned);
-    for (auto& m : walls_.meshes()) {
-      if (m.motion == MeshWall::Motion::pivot) m.theta_dot += 0.5 * dt_ * m.theta_ddot;
-      m.advance(dt_);
-    }
+    for (auto& m : walls_.meshes()) m.advance(dt_);
   }
   if (needs_rebuild()) {
     rebuild();
@@ -390,13 +412,7 @@ void DemSolver::step(bool defer_kick) {
     else
       integrate_second();
     kick_free_spheres(false);
-    for (auto& m : walls_.meshes()) {
-      m.update_acceleration(settings_.gravity);
-      if (m.motion == MeshWall::Motion::pivot) {
-        m.theta_dot += 0.5 * dt_ * m.theta_ddot;
-        m.omega = m.axis * m.theta_dot;
-      }
-    }
+    kick_pivots(true);
   }
   time_ += dt_;
   ++steps_;

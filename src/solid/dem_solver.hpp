@@ -35,11 +35,13 @@
 #include "solid/contact_history.hpp"
 #include "solid/contact_kernel.hpp"
 #include "solid/contact_model.hpp"
-#include "solid/free_spheres.hpp"
+#include "solid/free_sphere_contacts.hpp"
 #include "solid/halo.hpp"
-#include "solid/neighbor_list.hpp"
+#include "solid/mesh_wall_contacts.hpp"
+#include "solid/pair_contacts.hpp"
 #include "solid/particles.hpp"
 #include "solid/plane_wall_contacts.hpp"
+#include "solid/replicated_loads.hpp"
 #include "solid/rigid_rotation.hpp"
 #include "solid/shape.hpp"
 #include "solid/walls.hpp"
@@ -106,11 +108,11 @@ class DemSolver {
   // the material's. In plane mode a disc of the plane's thickness, its centre put in the plane.
   void add_free_sphere(const std::string& key, int material, double radius, const Vec3& x, const Vec3& v,
                        const Vec3& omega = {}, double density = 0);
-  const std::vector<FreeSphere>& free_spheres() const { return free_; }
-  std::vector<FreeSphere>& free_spheres() { return free_; }  // restart: state set from a checkpoint
+  const std::vector<FreeSphere>& free_spheres() const { return free_.spheres(); }
+  std::vector<FreeSphere>& free_spheres() { return free_.spheres(); }  // restart: state set from a checkpoint
   // Springs of free spheres on walls and meshes (the same on every rank; restart).
-  const HistoryMap& free_sphere_histories() const { return free_hist_; }
-  void set_free_sphere_histories(HistoryMap h) { free_hist_ = std::move(h); }
+  const HistoryMap& free_sphere_histories() const { return free_.wall_springs(); }
+  void set_free_sphere_histories(HistoryMap h) { free_.set_wall_springs(std::move(h)); }
   // History keys are element keys: body order * key_stride() + sphere index (1 without templates).
   std::int64_t key_stride() const { return key_stride_; }
   // Contact histories to use at the first build (restart).
@@ -171,11 +173,11 @@ class DemSolver {
   Vec3 wall_impulse() const { return plane_walls_.impulse(decomp_.comm()); }
   // Contact histories of touching pairs (this rank's list; pairs with an owned body).
   HistoryMap histories() const;
-  std::size_t list_builds() const { return list_.builds; }
-  std::size_t pair_count() const { return list_.size(); }
+  std::size_t list_builds() const { return pairs_.list().builds; }
+  std::size_t pair_count() const { return pairs_.list().size(); }
   // Collective: completes the load on each mesh wall (MeshWall::force, moment) for reporting;
   // pivot meshes have it every step already.
-  void sum_mesh_loads();
+  void sum_mesh_loads() { loads_.sum(decomp_.comm(), walls_.meshes(), free_.spheres()); }
   std::size_t halo_bytes_sent() const { return halo_.bytes_sent(); }  // this rank, whole run
   std::size_t migrations() const { return halo_.migrations(); }       // bodies this rank sent away
   // Ghosts: a body is copied to a neighbour when its centre is within radius + max_radius() + skin()
@@ -195,19 +197,10 @@ class DemSolver {
   bool needs_rebuild();
   // The law enters through the per-pair coefficients and the lane kernel's dispatch.
   void compute_forces(bool update_history);
-  // Both accumulate into the contact buffer k_force_; integrate_second (or store_forces) moves the
-  // totals into the bodies' f and torque.
-  void compute_pair_forces(double dt, bool update_history);
-  // The pair loop over one mirror layout (dem_forces.cpp: SphereMirrors, DiscMirrors<n>).
-  struct SphereMirrors;
-  template <int N>
-  struct DiscMirrors;
-  template <class Mirrors>
-  void pair_forces(Mirrors& mirrors, double dt, bool update_history);
+  // Every stage accumulates into the entities' contact buffer; integrate_second (or store_forces)
+  // moves the totals into the bodies' f and torque.
   void store_forces();
-  void fill_coefficients();  // the law's coefficients of every pair and wall contact in the lists
-  template <class Law>
-  void fill_pair_coefficients();
+  void fill_coefficients();  // the law's coefficients of every contact in the stages' lists
   void integrate_first();
   enum class Bodies { shaped, spheres, discs_x, discs_y, discs_z };  // discs: by their plane's normal
   template <Bodies kBodies, bool kExternal>
@@ -217,22 +210,15 @@ class DemSolver {
   void integrate_second_impl();
   void apply_pending_kick();
   bool external_loads_ = false;
-  // Triangle-mesh walls (T14): candidates at rebuild, forces each step, motion.
-  void build_mesh_candidates();
-  // Only the moving walls moved far enough: their candidates again, the pair list kept.
+  // Mesh walls and free spheres move: their candidates are found again when only they moved far
+  // enough (the pair list kept).
   void refresh_moving_candidates();
   void find_moving_candidates();  // mesh and free-sphere candidates, then every coefficient index
   bool refresh_moving_ = false;
   std::vector<double> x_moving_build_;  // owned bodies at the last candidate search of moving walls
-  void compute_mesh_forces(double dt);
-  double mesh_displacement() const;  // largest node displacement since the last build
-  // Free spheres (dem_free_spheres.cpp): grain candidates at rebuild, grain contacts, wall and mesh
-  // contacts (every rank alike), and the two half-kicks.
-  void build_free_sphere_candidates();
-  void compute_free_sphere_forces(double dt);
-  void compute_free_sphere_wall_forces(double dt);
+  // The half-kicks (and the drift) of the free spheres and the pivot meshes (dem_integrator.cpp).
   void kick_free_spheres(bool drift);
-  double free_sphere_displacement() const;
+  void kick_pivots(bool second);
   void rotate_shaped(std::size_t i, const double* torque, double h, double dt);
   bool anisotropic(int shape) const { return shape > 0 && anisotropic_[shape]; }
 
@@ -244,8 +230,13 @@ class DemSolver {
   std::array<double, 3> velocity_mask_{1, 1, 1}, spin_mask_{1, 1, 1};
   ParticleStore p_;
   ContactEntities entities_{p_};  // bodies or their contact spheres; kernel mirrors, contact buffer
+  // The stages that own their state: walls of planes and boxes, mesh walls, free spheres, and the
+  // loads the bodies put on the last two (summed over the ranks in key order).
   PlaneWallContacts plane_walls_;
-  NeighborList list_;
+  MeshWallContacts mesh_walls_;
+  FreeSphereContacts free_;
+  ReplicatedLoads loads_;
+  PairContacts pairs_;
   Halo halo_;
   HistoryMap pending_;
   PhaseTimers timers_;
@@ -256,15 +247,8 @@ class DemSolver {
   std::vector<double> turn_;            // plane mode: each owned disc's turn about the normal since fold_turns
   double moved2_[2] = {0, 0};           // sphere bodies: squared largest displacements (see needs_rebuild)
   bool owned_mirrors_current_ = false;  // the owned bodies' mirrors packed by integrate_first
-  // Law coefficients: a table of the distinct sets (one per material pair for equal bodies) and,
-  // per listed pair, an index into it: 4 bytes per pair to stream instead of 40.
-  std::vector<ContactCoefficients> coefficient_sets_;
-  std::vector<std::int32_t> pair_coefficient_;
-  ContactLanes lanes_;
-  // Listed pairs touching now (ascending list indices); per listed pair, whether it touched at the
-  // previous evaluation that advanced the histories.
-  std::vector<std::int32_t> touching_;
-  std::vector<std::uint8_t> was_touching_;
+  CoefficientTable coefficients_;  // the law's sets of every contact in the stages' lists
+  ContactLanes lanes_;               // the kernel's lanes, shared by the stages
   // Shaped mode.
   std::vector<ShapeTemplate> shapes_;
   std::vector<char> anisotropic_;  // per shape id: principal moments differ (DLM rotation)
@@ -272,26 +256,6 @@ class DemSolver {
   std::vector<double> q_build_;     // owned bodies' orientations at the last build (shaped mode)
   std::vector<double> arm_;         // per shape: the farthest contact-sphere centre from the body's
   std::vector<double> inertia3_;    // owned bodies: principal moments (3 each)
-  // Mesh walls: (entity, mesh) pairs within reach at the last rebuild, their candidate triangles,
-  // coefficients; tangential histories by (element key, mesh, contact ordinal).
-  std::vector<std::int32_t> mesh_entity_, mesh_of_, mesh_cand_start_, mesh_cands_, mesh_coefficient_;
-  std::unordered_map<std::uint64_t, std::array<double, 3>> mesh_hist_, mesh_hist_next_;
-  std::vector<std::vector<Vec3>> mesh_nodes_build_;
-  std::vector<double> mesh_loads_;  // this rank's mesh (and free-sphere) contacts at the last evaluation
-  // Free spheres: (entity, sphere) pairs within reach at the last rebuild and their coefficient
-  // sets; the spheres' own wall and mesh coefficient sets (sphere-major); their wall springs.
-  std::vector<FreeSphere> free_;
-  std::vector<std::int32_t> free_entity_, free_of_, free_coefficient_, free_wall_coefficient_;
-  HistoryMap free_hist_, free_hist_next_;
-  struct FreeTouch {  // a free sphere's contact with a wall plane (mesh -1) or a mesh
-    PairKey key;
-    Vec3 normal, point;
-    double overlap;
-    int coefficient, mesh;
-  };
-  std::vector<FreeTouch> free_touches_;         // reused each step
-  std::vector<std::vector<int>> triangle_ids_;  // per mesh: 0 .. triangles - 1
-  bool mesh_loads_pending_ = false;
   double dt_ = 0, time_ = 0, skin_ = 0, r_max_ = 0, t_contact_ = 0;
   long steps_ = 0;
 };

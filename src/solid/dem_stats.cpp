@@ -46,8 +46,8 @@ DemStats DemSolver::stats() const {
   auto eid = [&](std::size_t a) { return p_.id[entities_.body(a)]; };
   const std::size_t owned_elements = entities_.owned();
   std::unordered_set<PairKey> touching_bodies;
-  for (std::size_t k = 0; k < list_.size(); ++k) {
-    const auto a = static_cast<std::size_t>(list_.first[k]), b = static_cast<std::size_t>(list_.second[k]);
+  for (std::size_t k = 0; k < pairs_.list().size(); ++k) {
+    const auto a = static_cast<std::size_t>(pairs_.list().first[k]), b = static_cast<std::size_t>(pairs_.list().second[k]);
     if (a >= owned_elements) continue;  // counted by the owner of the lower-key element
     const double r = norm(ex(a) - ex(b)), rs = er(a) + er(b);
     if (r < rs) {
@@ -72,7 +72,7 @@ DemStats DemSolver::stats() const {
   MPI_Comm comm = decomp_.comm();
   // Free spheres are held on every rank: added once, after the sums.
   ExactSum::all_reduce(energy, comm);
-  for (const FreeSphere& fs : free_) {
+  for (const FreeSphere& fs : free_.spheres()) {
     energy[0] += 0.5 * fs.mass * norm2(fs.v);
     energy[1] += 0.5 * fs.inertia * norm2(fs.omega);
   }
@@ -81,7 +81,7 @@ DemStats DemSolver::stats() const {
   MPI_Allreduce(MPI_IN_PLACE, c, 6, MPI_LONG, MPI_SUM, comm);
   if (!std::isfinite(worst.ratio)) worst.ratio = 1e300;
   MPI_Allreduce(MPI_IN_PLACE, &worst, 1, MPI_DOUBLE_INT, MPI_MAXLOC, comm);
-  for (const FreeSphere& fs : free_) {
+  for (const FreeSphere& fs : free_.spheres()) {
     if (!std::isfinite(norm2(fs.x) + norm2(fs.v) + norm2(fs.omega))) ++c[3];
     e[2] = std::max(e[2], norm(fs.v));
   }

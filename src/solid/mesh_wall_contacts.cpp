@@ -1,45 +1,35 @@
 // SPDX-License-Identifier: MIT
-// Triangle-mesh walls inside the DEM step (T14, mesh_walls.hpp): candidate triangles of each
-// (element, mesh) pair within reach at a rebuild, the contacts' forces each step (face, edge or
-// vertex, counted once, T11), and the loads on the meshes summed over all ranks in key order (a
-// pivot's equation of motion needs the whole load every step).
+#include "solid/mesh_wall_contacts.hpp"
+
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 
-#include "core/all_gather.hpp"
-#include "solid/contact_kernel.hpp"
-#include "solid/dem_solver.hpp"
 #include "solid/triangle_contact.hpp"
 
 namespace tessera {
 
-double DemSolver::mesh_displacement() const {
+double MeshWallContacts::displacement(const std::vector<MeshWall>& meshes) const {
   double d2 = 0;
-  const auto& meshes = walls_.meshes();
-  for (std::size_t m = 0; m < meshes.size() && m < mesh_nodes_build_.size(); ++m)
+  for (std::size_t m = 0; m < meshes.size() && m < nodes_at_find_.size(); ++m)
     for (std::size_t k = 0; k < meshes[m].nodes.size(); ++k)
-      d2 = std::max(d2, norm2(meshes[m].nodes[k] - mesh_nodes_build_[m][k]));
+      d2 = std::max(d2, norm2(meshes[m].nodes[k] - nodes_at_find_[m][k]));
   return std::sqrt(d2);
 }
 
-void DemSolver::build_mesh_candidates() {
-  // Each owned entity (body, or contact sphere of a shaped body) against each mesh: the triangles
-  // within its radius + skin, found through a grid of the triangles' bounding boxes.
-  mesh_entity_.clear(), mesh_of_.clear(), mesh_cands_.clear();
-  mesh_cand_start_.assign(1, 0);
-  const auto& meshes = walls_.meshes();
-  mesh_nodes_build_.resize(meshes.size());
+void MeshWallContacts::find(const ContactEntities& entities, const std::vector<MeshWall>& meshes, double skin) {
+  entity_.clear(), mesh_of_.clear(), cands_.clear();
+  cand_start_.assign(1, 0);
+  nodes_at_find_.resize(meshes.size());
   if (meshes.empty()) return;
-  const std::size_t n = entities_.owned();
-  auto centre = [&](std::size_t e) { return entities_.centre(e); };
-  auto radius = [&](std::size_t e) { return entities_.radius(e); };
+  const std::size_t n = entities.owned();
+  auto centre = [&](std::size_t e) { return entities.centre(e); };
+  auto radius = [&](std::size_t e) { return entities.radius(e); };
   double r_max = 0;
   for (std::size_t e = 0; e < n; ++e) r_max = std::max(r_max, radius(e));
   std::vector<int> found;
   for (std::size_t mi = 0; mi < meshes.size(); ++mi) {
     const MeshWall& m = meshes[mi];
-    mesh_nodes_build_[mi] = m.nodes;
+    nodes_at_find_[mi] = m.nodes;
     Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
     double edge = 0;
     for (const auto& t : m.triangles)
@@ -48,7 +38,7 @@ void DemSolver::build_mesh_candidates() {
         for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], v[d]), hi[d] = std::max(hi[d], v[d]);
         edge = std::max(edge, norm(v - m.nodes[t[(a + 1) % 3]]));
       }
-    const double reach = r_max + skin_;
+    const double reach = r_max + skin;
     double h = std::max(2 * reach, 0.5 * edge);
     int nc[3];
     for (;;) {
@@ -76,7 +66,7 @@ void DemSolver::build_mesh_candidates() {
     }
     for (std::size_t e = 0; e < n; ++e) {
       const Vec3 c = centre(e);
-      const double r = radius(e) + skin_;
+      const double r = radius(e) + skin;
       bool outside = false;
       for (int d = 0; d < 3; ++d) outside = outside || c[d] + r < lo[d] || c[d] - r > hi[d];
       if (outside) continue;
@@ -93,39 +83,34 @@ void DemSolver::build_mesh_candidates() {
       if (found.empty()) continue;
       std::sort(found.begin(), found.end());
       found.erase(std::unique(found.begin(), found.end()), found.end());
-      mesh_entity_.push_back(static_cast<std::int32_t>(e));
+      entity_.push_back(static_cast<std::int32_t>(e));
       mesh_of_.push_back(static_cast<std::int32_t>(mi));
-      mesh_cands_.insert(mesh_cands_.end(), found.begin(), found.end());
-      mesh_cand_start_.push_back(static_cast<std::int32_t>(mesh_cands_.size()));
+      cands_.insert(cands_.end(), found.begin(), found.end());
+      cand_start_.push_back(static_cast<std::int32_t>(cands_.size()));
     }
   }
 }
 
-void DemSolver::compute_mesh_forces(double dt) {
+void MeshWallContacts::forces(ContactEntities& entities, std::vector<MeshWall>& meshes, ContactLanes& L,
+                              const ContactCoefficients* sets, LawKind law, double dt, ReplicatedLoads& loads) {
   // Per (entity, mesh): the contacts after de-duplication (T11), each through the wall law with
   // the wall's velocity at the contact point; the reaction goes to the mesh (force, moment about
-  // its origin). Tangential springs are kept by (element key, mesh, contact ordinal): a sphere
-  // rolling over a flat mesh keeps its spring across triangle edges.
-  auto& meshes = walls_.meshes();
+  // its origin), listed in `loads` for the sum in key order.
   for (auto& m : meshes) m.force = m.moment = Vec3{};
-  const bool sh = shaped();
-  ContactLanes& L = lanes_;
-  const ContactCoefficients* sets = coefficient_sets_.data();
+  hist_next_.clear();
+  const bool sh = entities.shaped();
   std::vector<int> cands;
-  // The load on each mesh is summed over all contacts in key order, on every rank: the same bits
-  // whatever the decomposition (pivot dynamics stay rank-count independent).
-  std::vector<double>& loads = mesh_loads_;  // per contact: key (2 x 32 bits), mesh, force, moment
-  for (std::size_t k = 0; k < mesh_entity_.size(); ++k) {
-    const std::size_t e = mesh_entity_[k];
+  for (std::size_t k = 0; k < entity_.size(); ++k) {
+    const std::size_t e = entity_[k];
     MeshWall& m = meshes[mesh_of_[k]];
-    const KernelGeometry ge = entities_.geometry(e);
+    const KernelGeometry ge = entities.geometry(e);
     const Vec3 c{ge.x, ge.y, ge.z};
-    cands.assign(mesh_cands_.begin() + mesh_cand_start_[k], mesh_cands_.begin() + mesh_cand_start_[k + 1]);
+    cands.assign(cands_.begin() + cand_start_[k], cands_.begin() + cand_start_[k + 1]);
     const auto contacts = sphere_mesh_contacts(c, ge.r, m.nodes, m.triangles, cands);
     if (contacts.empty()) continue;
-    if (sh) entities_.refresh_motion(e);
-    const KernelMotion me = entities_.motion(e);
-    const std::int64_t ekey = entities_.key(e);
+    if (sh) entities.refresh_motion(e);
+    const KernelMotion me = entities.motion(e);
+    const std::int64_t ekey = entities.key(e);
     std::size_t nb = 0;
     std::uint64_t keys[ContactLanes::width];
     Vec3 points[ContactLanes::width];
@@ -138,51 +123,22 @@ void DemSolver::compute_mesh_forces(double dt) {
       L.wx[nb] = me.wx * ge.r, L.wy[nb] = me.wy * ge.r, L.wz[nb] = me.wz * ge.r;
       keys[nb] = mesh_key(ekey, mesh_of_[k], static_cast<int>(j));
       points[nb] = tc.point;
-      const std::array<double, 3> h = spring_or_zero(mesh_hist_, keys[nb]);
+      const std::array<double, 3> h = spring_or_zero(hist_, keys[nb]);
       L.hx[nb] = h[0], L.hy[nb] = h[1], L.hz[nb] = h[2];
-      const ContactCoefficients& cs = sets[mesh_coefficient_[k]];
+      const ContactCoefficients& cs = sets[coefficient_[k]];
       L.set_coefficients(nb, cs);
     }
     if (nb == 0) continue;
-    evaluate_wall_contacts(model_.law(), L, nb, dt);
+    evaluate_wall_contacts(law, L, nb, dt);
     for (std::size_t j = 0; j < nb; ++j) {
-      mesh_hist_next_[keys[j]] = {L.hx[j], L.hy[j], L.hz[j]};
-      entities_.add_wall_reaction(e, L, j);
+      hist_next_[keys[j]] = {L.hx[j], L.hy[j], L.hz[j]};
+      entities.add_wall_reaction(e, L, j);
       const Vec3 f{L.fx[j], L.fy[j], L.fz[j]};
       const Vec3 moment = cross(points[j] - m.origin, f);
-      loads.insert(loads.end(), {static_cast<double>(keys[j] >> 32), static_cast<double>(keys[j] & 0xffffffffULL),
-                                 static_cast<double>(mesh_of_[k]), -f.x, -f.y, -f.z, -moment.x, -moment.y, -moment.z});
+      loads.add(keys[j], static_cast<std::size_t>(mesh_of_[k]), -f, -moment);
     }
   }
-}
-
-void DemSolver::sum_mesh_loads() {
-  // Every rank gets the load on each mesh, summed over all contacts in key order.
-  if (!mesh_loads_pending_) return;
-  mesh_loads_pending_ = false;
-  auto& meshes = walls_.meshes();
-  constexpr int stride = 9;
-  const std::vector<double> all = all_gather_concat(decomp_.comm(), mesh_loads_);
-  const std::size_t n = all.size() / stride;
-  std::vector<std::size_t> order(n);
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return all[a * stride] != all[b * stride] ? all[a * stride] < all[b * stride]
-                                              : all[a * stride + 1] < all[b * stride + 1];
-  });
-  for (const auto c : order) {
-    const double* r = &all[c * stride];
-    const auto target = static_cast<std::size_t>(r[2]);
-    if (target < meshes.size()) {
-      MeshWall& m = meshes[target];
-      m.force += Vec3{r[3], r[4], r[5]};
-      m.moment += Vec3{r[6], r[7], r[8]};
-    } else {  // a free sphere: moment about its centre
-      FreeSphere& s = free_[target - meshes.size()];
-      s.force += Vec3{r[3], r[4], r[5]};
-      s.torque += Vec3{r[6], r[7], r[8]};
-    }
-  }
+  if (dt > 0) hist_.swap(hist_next_);
 }
 
 }  // namespace tessera

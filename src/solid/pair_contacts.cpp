@@ -1,0 +1,213 @@
+// SPDX-License-Identifier: MIT
+#include "solid/pair_contacts.hpp"
+
+#include <algorithm>
+
+namespace tessera {
+
+void PairContacts::start_list() {
+  was_touching_.resize(list_.size());
+  for (std::size_t k = 0; k < list_.size(); ++k)
+    was_touching_[k] =
+        list_.history[3 * k] != 0.0 || list_.history[3 * k + 1] != 0.0 || list_.history[3 * k + 2] != 0.0;
+}
+
+void PairContacts::fill_coefficients(const ContactEntities& entities, CoefficientTable& table) {
+  // Grains of many sizes make nearly every pair's (m*, R*) distinct: once the first 256 pairs show
+  // that (more than half of them new sets), the rest get their own sets without the hash map.
+  coefficient_.resize(list_.size());
+  constexpr std::size_t probe = 256;
+  bool shared = true;
+  for (std::size_t k = 0; k < list_.size(); ++k) {
+    const std::size_t a = list_.first[k], b = list_.second[k];
+    const double ra = entities.radius(a), rb = entities.radius(b);
+    const int ma = entities.material(a), mb = entities.material(b);
+    const double reff = ra * rb / (ra + rb);
+    if (shared) {
+      coefficient_[k] = table.find(ma, mb, list_.meff[k], reff);
+      if (k + 1 == probe && 2 * table.size() > probe) shared = false;
+    } else {
+      coefficient_[k] = table.add(ma, mb, list_.meff[k], reff);
+    }
+  }
+}
+
+// The pair loop's access to one mirror layout: packing a body's mirror, pass 1's overlap test, the
+// partner's prefetches, the gather of a pair into a lane and the accumulation of its force.
+struct PairContacts::SphereMirrors {  // 3D mirrors per element (spheres, shaped bodies' elements)
+  const ParticleStore& p;
+  const ContactEntities& entities;
+  KernelGeometry* g;
+  KernelMotion* m;
+  KernelForce* out;
+  bool sh;
+  void pack(std::size_t i) {
+    const double* x = &p.x[3 * i];
+    const double* v = &p.v[3 * i];
+    const double* w = &p.omega[3 * i];
+    g[i] = {x[0], x[1], x[2], p.radius[i]};
+    m[i] = {v[0], v[1], v[2], w[0], w[1], w[2]};
+  }
+  bool touching(std::size_t a, std::size_t b) const {
+    const KernelGeometry &ga = g[a], &gb = g[b];
+    const double dx = ga.x - gb.x, dy = ga.y - gb.y, dz = ga.z - gb.z, rsum = ga.r + gb.r;
+    return dx * dx + dy * dy + dz * dz < rsum * rsum;
+  }
+  void prefetch_geometry(std::size_t b) const { __builtin_prefetch(&g[b]); }
+  void prefetch_partner(std::size_t b) const {
+    __builtin_prefetch(&g[b]);
+    __builtin_prefetch(&m[b]);
+    __builtin_prefetch(&out[b], 1);
+  }
+  void gather(ContactLanes& L, std::size_t j, std::size_t a, std::size_t b) const {
+    const KernelGeometry &ga = g[a], &gb = g[b];
+    const KernelMotion &ma = m[a], &mb = m[b];
+    L.dx[j] = ga.x - gb.x, L.dy[j] = ga.y - gb.y, L.dz[j] = ga.z - gb.z;
+    L.ra[j] = ga.r, L.rb[j] = gb.r;
+    L.vx[j] = ma.vx - mb.vx, L.vy[j] = ma.vy - mb.vy, L.vz[j] = ma.vz - mb.vz;
+    L.wx[j] = ma.wx * ga.r + mb.wx * gb.r;
+    L.wy[j] = ma.wy * ga.r + mb.wy * gb.r;
+    L.wz[j] = ma.wz * ga.r + mb.wz * gb.r;
+  }
+  void accumulate(const ContactLanes& L, std::size_t j, std::size_t ea, std::size_t eb) {
+    const std::size_t a = sh ? entities.body(ea) : ea;
+    const std::size_t b = sh ? entities.body(eb) : eb;
+    KernelForce &fa = out[a], &fb = out[b];
+    fa.fx += L.fx[j], fa.fy += L.fy[j], fa.fz += L.fz[j];
+    fb.fx -= L.fx[j], fb.fy -= L.fy[j], fb.fz -= L.fz[j];
+    fa.tx -= L.nx[j] * L.ra[j], fa.ty -= L.ny[j] * L.ra[j], fa.tz -= L.nz[j] * L.ra[j];
+    fb.tx -= L.nx[j] * L.rb[j], fb.ty -= L.ny[j] * L.rb[j], fb.tz -= L.nz[j] * L.rb[j];
+    if (sh) {
+      entities.add_lever(fa, g[ea], a, L.fx[j], L.fy[j], L.fz[j]);
+      entities.add_lever(fb, g[eb], b, -L.fx[j], -L.fy[j], -L.fz[j]);
+    }
+  }
+};
+
+template <int N>
+struct PairContacts::DiscMirrors {  // plane mode, normal along axis N (kernel_mirrors.hpp)
+  static constexpr int U = plane_u(N), V = plane_v(N);
+  const ParticleStore& p;
+  DiscMirror* g;
+  DiscForce* out;
+  void pack(std::size_t i) {
+    const double* x = &p.x[3 * i];
+    const double* v = &p.v[3 * i];
+    g[i] = {x[U], x[V], p.radius[i], v[U], v[V], p.omega[3 * i + N]};
+  }
+  bool touching(std::size_t a, std::size_t b) const {
+    const DiscMirror &ga = g[a], &gb = g[b];
+    const double du = ga.u - gb.u, dv = ga.v - gb.v, rsum = ga.r + gb.r;
+    return du * du + dv * dv < rsum * rsum;
+  }
+  void prefetch_geometry(std::size_t b) const { __builtin_prefetch(&g[b]); }
+  void prefetch_partner(std::size_t b) const {
+    __builtin_prefetch(&g[b]);
+    __builtin_prefetch(&out[b], 1);
+  }
+  void gather(ContactLanes& L, std::size_t j, std::size_t a, std::size_t b) const {
+    const DiscMirror &ga = g[a], &gb = g[b];
+    double* d[3] = {L.dx, L.dy, L.dz};
+    double* v[3] = {L.vx, L.vy, L.vz};
+    double* w[3] = {L.wx, L.wy, L.wz};
+    d[U][j] = ga.u - gb.u, d[V][j] = ga.v - gb.v, d[N][j] = 0.0;
+    L.ra[j] = ga.r, L.rb[j] = gb.r;
+    v[U][j] = ga.vu - gb.vu, v[V][j] = ga.vv - gb.vv, v[N][j] = 0.0;
+    w[U][j] = 0.0, w[V][j] = 0.0, w[N][j] = ga.wn * ga.r + gb.wn * gb.r;
+  }
+  void accumulate(const ContactLanes& L, std::size_t j, std::size_t a, std::size_t b) {
+    const double* f[3] = {L.fx, L.fy, L.fz};
+    const double* nf[3] = {L.nx, L.ny, L.nz};
+    DiscForce &fa = out[a], &fb = out[b];
+    fa.fu += f[U][j], fa.fv += f[V][j];
+    fb.fu -= f[U][j], fb.fv -= f[V][j];
+    fa.tn -= nf[N][j] * L.ra[j];
+    fb.tn -= nf[N][j] * L.rb[j];
+  }
+};
+
+void PairContacts::forces(ContactEntities& entities, std::size_t packed, ContactLanes& lanes,
+                          const ContactCoefficients* sets, LawKind law, double dt, bool update_history) {
+  entities.start_forces();
+  const ParticleStore& p = entities.bodies();
+  if (!entities.discs()) {
+    SphereMirrors view{p, entities, entities.geometry_mirrors().data(), entities.motion_mirrors().data(),
+                       entities.forces().data(), entities.shaped()};
+    loop(view, entities, packed, lanes, sets, law, dt, update_history);
+    return;
+  }
+  DiscMirror* g = entities.disc_mirrors().data();
+  DiscForce* f = entities.disc_forces().data();
+  auto run = [&](auto view) { loop(view, entities, packed, lanes, sets, law, dt, update_history); };
+  switch (entities.plane_normal()) {
+    case 0: run(DiscMirrors<0>{p, g, f}); break;
+    case 1: run(DiscMirrors<1>{p, g, f}); break;
+    default: run(DiscMirrors<2>{p, g, f}); break;
+  }
+}
+
+template <class Mirrors>
+void PairContacts::loop(Mirrors& view, ContactEntities& entities, std::size_t packed, ContactLanes& L,
+                        const ContactCoefficients* sets, LawKind law, double dt, bool update_history) {
+  const std::size_t n = entities.size();
+  const std::size_t np = list_.size();
+  const std::int32_t* first = list_.first.data();
+  const std::int32_t* second = list_.second.data();
+  double* hist = list_.history.data();
+  // Owned bodies were packed by the integrator unless a rebuild moved them; ghosts always here.
+  // (Shaped mode: every element was placed by ContactEntities::place.)
+  for (std::size_t i = packed; i < n; ++i) view.pack(i);
+  // Pass 1, branch-free: which listed pairs touch (about half of them in a dense bed, at random,
+  // which a branch would mispredict). The compacted list keeps the canonical order.
+  // Contacts that opened since the last evaluation lose their history (T3): a pair that touched then
+  // (was_touching_) and does not now. Rare, so the branch is predicted.
+  touching_.resize(np);
+  was_touching_.resize(np, 0);
+  std::uint8_t* was = was_touching_.data();
+  std::size_t nt = 0;
+  // Prefetch distances: partners are scattered over ~1000 bodies, and a large bed's mirrors come
+  // from memory. Pass 1 spends a few ns a pair, so it looks further ahead than pass 2.
+  constexpr std::size_t ahead = 16, ahead1 = 64;
+  for (std::size_t k = 0; k < np; ++k) {
+    if (k + ahead1 < np) view.prefetch_geometry(second[k + ahead1]);
+    touching_[nt] = static_cast<std::int32_t>(k);
+    const bool touch = view.touching(first[k], second[k]);
+    nt += touch ? 1 : 0;
+    if (update_history) {
+      if (was[k] && !touch) hist[3 * k] = hist[3 * k + 1] = hist[3 * k + 2] = 0.0;
+      was[k] = touch ? 1 : 0;
+    }
+  }
+  touching_.resize(nt);
+  if (entities.shaped())
+    for (const auto k : touching_) entities.refresh_motion(first[k]), entities.refresh_motion(second[k]);
+  // Pass 2, in blocks: gather the pairs' data into lanes, evaluate the law on all lanes
+  // (vectorised, contact_kernel.cpp), then accumulate forces in canonical order.
+  constexpr std::size_t B = ContactLanes::width;
+  const std::int32_t* pc = coefficient_.data();
+  for (std::size_t s = 0; s < nt; s += B) {
+    const std::size_t nb = std::min(B, nt - s);
+    for (std::size_t j = 0; j < nb; ++j) {
+      if (s + j + ahead < nt) {
+        // The partner's lines (pass 1 read its geometry long ago: a large bed's mirrors leave the
+        // cache in between), the pair's history and its coefficient set.
+        const std::size_t kk = static_cast<std::size_t>(touching_[s + j + ahead]);
+        view.prefetch_partner(second[kk]);
+        __builtin_prefetch(&hist[3 * kk], 1);
+        __builtin_prefetch(&sets[pc[kk]]);
+      }
+      const std::size_t k = static_cast<std::size_t>(touching_[s + j]);
+      view.gather(L, j, first[k], second[k]);
+      L.hx[j] = hist[3 * k], L.hy[j] = hist[3 * k + 1], L.hz[j] = hist[3 * k + 2];
+      L.set_coefficients(j, sets[pc[k]]);
+    }
+    evaluate_contacts(law, L, nb, dt);
+    for (std::size_t j = 0; j < nb; ++j) {
+      const std::size_t k = static_cast<std::size_t>(touching_[s + j]);
+      hist[3 * k] = L.hx[j], hist[3 * k + 1] = L.hy[j], hist[3 * k + 2] = L.hz[j];
+      view.accumulate(L, j, first[k], second[k]);
+    }
+  }
+}
+
+}  // namespace tessera
