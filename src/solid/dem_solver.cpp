@@ -384,41 +384,49 @@ void DemSolver::find_moving_candidates() {
 }
 
 void DemSolver::step(bool defer_kick) {
-  if (plane_walls_.tracking_impulse()) plane_walls_.add_half_impulse(dt_);  // the first half-kick's wall forces
-  {
-    auto t = timers_.scope("integrate");
-    integrate_first();
-    kick_free_spheres(true);
-    kick_pivots(false);
-    if (shaped()) entities_.place(shapes_, 0, p_.owned);
-    for (auto& m : walls_.meshes()) m.advance(dt_);
-  }
-  if (needs_rebuild()) {
-    rebuild();
-  } else {
-    {
-      auto t = timers_.scope("ghost_comm");
-      halo_.forward(p_);
-      if (shaped()) entities_.place(shapes_, p_.owned, p_.size());
-    }
-    if (refresh_moving_) refresh_moving_candidates();
-  }
+  first_half_kick_and_drift();
+  update_neighbours();
   compute_forces(true);
-  if (plane_walls_.tracking_impulse()) plane_walls_.add_half_impulse(dt_);  // the second's
-  {
-    auto t = timers_.scope("integrate");
-    if (defer_kick && !shaped())
-      kick_pending_ = true;
-    else
-      integrate_second();
-    kick_free_spheres(false);
-    kick_pivots(true);
-  }
+  second_half_kick(defer_kick);
   time_ += dt_;
   ++steps_;
   if (!(std::isfinite(p_.owned ? p_.x[0] : 0.0)))
     throw RunError("non-finite body position at step " + std::to_string(steps_) +
                    ": the time step is too large for the contact stiffness");
+}
+
+void DemSolver::first_half_kick_and_drift() {
+  if (plane_walls_.tracking_impulse()) plane_walls_.add_half_impulse(dt_);  // the kick's wall forces
+  auto t = timers_.scope("integrate");
+  integrate_first();
+  kick_free_spheres(true);
+  kick_pivots(false);
+  if (shaped()) entities_.place(shapes_, 0, p_.owned);
+  for (auto& m : walls_.meshes()) m.advance(dt_);
+}
+
+void DemSolver::update_neighbours() {
+  if (needs_rebuild()) {
+    rebuild();
+    return;
+  }
+  {
+    auto t = timers_.scope("ghost_comm");
+    halo_.forward(p_);
+    if (shaped()) entities_.place(shapes_, p_.owned, p_.size());
+  }
+  if (refresh_moving_) refresh_moving_candidates();
+}
+
+void DemSolver::second_half_kick(bool defer) {
+  if (plane_walls_.tracking_impulse()) plane_walls_.add_half_impulse(dt_);
+  auto t = timers_.scope("integrate");
+  if (defer && !shaped())
+    kick_pending_ = true;
+  else
+    integrate_second();
+  kick_free_spheres(false);
+  kick_pivots(true);
 }
 
 }  // namespace tessera

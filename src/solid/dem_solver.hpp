@@ -1,24 +1,29 @@
 // SPDX-License-Identifier: MIT
-// The DEM: one time step is the ordered list of stages below; timers use the same names.
+// The DEM: one time step (step()) is the ordered list of stages below; timers use the names in
+// brackets. Each contact stage is a class that owns its lists, springs and coefficients:
 //
-//   integrate_first   v += dt/2 (F/m + g), w += dt/2 T/I, x += dt v, q += dt/2 (0,w) q     (T8)
-//   neighbor          if some body moved > skin/2 since the last build (global check):
-//                       migrate -> ghosts -> sort by id -> rebuild the contact list
-//   ghost_comm        otherwise: refresh ghost x, v, w
-//   contact_forces    pairs in canonical order (T1-T4), then walls (T7)
-//   integrate_second  v += dt/2 (F/m + g), w += dt/2 T/I                                   (T8)
-//                     (F, T taken from the contact buffer and stored with the body; step(true)
-//                     defers it to the next integrate_first, which then applies both kicks)
+//   first_half_kick_and_drift  [integrate]  v += dt/2 (F/m + g), w += dt/2 T/I, x += dt v,
+//                              q += dt/2 (0,w) q (T8); free spheres and pivot meshes alike
+//                              (dem_integrator.cpp); shaped bodies' elements placed, meshes moved
+//   update_neighbours          [neighbor, migration, ghost_comm]  if some body moved > skin/2 since
+//                              the last build (global check): migrate -> ghosts -> order -> pair
+//                              list and every stage's list; otherwise refresh the ghosts
+//   compute_forces             [contact_forces] pairs (PairContacts, T1-T4, canonical order)
+//                              [wall_forces] planes and boxes (PlaneWallContacts, T7), mesh walls
+//                              (MeshWallContacts, T14), free spheres (FreeSphereContacts, T17);
+//                              all into the contact buffer of ContactEntities
+//   second_half_kick           [integrate]  v += dt/2 (F/m + g), w += dt/2 T/I (T8); step(true)
+//                              defers it into the next first pass, which then applies both kicks
 //
 // Velocity Verlet (LAMMPS nve/sphere), second order for conservative forces; the damping and
 // history terms see the half-step velocity.
 //
 // Shaped bodies (shape templates, T13): when the case declares templates, contacts are between
 // contact elements (a sphere body is one element; a shaped body has one per contact sphere, placed
-// at x + R(q) c_s each step, moving with v + w x R(q) c_s). The list, the kernel and the histories
-// work on elements; each contact's force goes to its two bodies with its lever-arm torque, in the
-// canonical pair order. Shaped bodies rotate by the DLM splitting (T9) between the torque
-// half-kicks; spheres keep the update above.
+// at x + R(q) c_s each step, moving with v + w x R(q) c_s; contact_entities.hpp). The list, the
+// kernel and the histories work on elements; each contact's force goes to its two bodies with its
+// lever-arm torque, in the canonical pair order. Shaped bodies rotate by the DLM splitting (T9)
+// between the torque half-kicks; spheres keep the update above.
 #pragma once
 #include <mpi.h>
 
@@ -193,6 +198,10 @@ class DemSolver {
   void refresh_ghosts() { halo_.forward(p_); }
 
  private:
+  // The stages of step() (see the top of this file).
+  void first_half_kick_and_drift();
+  void update_neighbours();
+  void second_half_kick(bool defer);
   void rebuild();
   bool needs_rebuild();
   // The law enters through the per-pair coefficients and the lane kernel's dispatch.
