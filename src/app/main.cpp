@@ -3,6 +3,7 @@
 //
 //   tessera run CASE.yaml [--set section.key=value ...] [--output DIR] [--restart CHECKPOINT] [--quiet]
 //               [--petsc "-poisson_pc_type gamg ..."]
+//   tessera balance CASE.yaml --bodies CHECKPOINT.h5 --ranks 4,16,64 [--set ...] [--json FILE]
 //   tessera info
 // Exit codes: 0 done, 2 bad input (nothing written), 3 interrupted by a signal (checkpoint written),
 // 4 blow-up (failure.h5 written), 1 other failure (MPI_Abort).
@@ -20,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "app/balance_report.hpp"
 #include "app/dem_scene.hpp"
 #if defined(TESSERA_HAVE_PETSC)
 #include <petscsys.h>
@@ -39,10 +41,13 @@ namespace {
 const char* kUsage =
     "usage: tessera run CASE.yaml [--set section.key=value ...] [--output DIR] [--restart CHECKPOINT] [--quiet]\n"
     "                   [--petsc \"PETSc options\"]   (flow scenes: e.g. -poisson_ksp_monitor -poisson_pc_type gamg)\n"
+    "       tessera balance CASE.yaml --bodies CHECKPOINT.h5 --ranks 4,16,64 [--set ...] [--json FILE]\n"
+    "                   (imbalance of the checkpoint's bodies on P ranks: equal slabs and balanced cuts)\n"
     "       tessera info\n";
 
 struct Args {
-  std::string command, case_file, output, petsc_options;
+  std::string command, case_file, output, petsc_options, bodies, json;
+  std::vector<int> ranks;
   std::vector<std::string> sets;
   std::optional<std::string> restart;
   bool quiet = false;
@@ -68,7 +73,24 @@ Args parse_args(int argc, char** argv) {
       a.restart = value("--restart");
     else if (s == "--petsc")
       a.petsc_options += " " + value("--petsc");
-    else if (s == "--quiet")
+    else if (s == "--bodies")
+      a.bodies = value("--bodies");
+    else if (s == "--json")
+      a.json = value("--json");
+    else if (s == "--ranks") {
+      const std::string list = value("--ranks");
+      std::size_t at = 0;
+      while (at < list.size()) {
+        const std::size_t comma = std::min(list.find(',', at), list.size());
+        try {
+          a.ranks.push_back(std::stoi(list.substr(at, comma - at)));
+        } catch (const std::exception&) {
+          throw InputError("--ranks", list, "rank counts separated by commas, e.g. 4,16,64");
+        }
+        if (a.ranks.back() < 1) throw InputError("--ranks", list, "positive rank counts");
+        at = comma + 1;
+      }
+    } else if (s == "--quiet")
       a.quiet = true;
     else if (!s.empty() && s[0] != '-' && a.case_file.empty())
       a.case_file = s;
@@ -130,12 +152,14 @@ int main(int argc, char** argv) {
                     kFluidModule ? "on (PETSc)" : "off (built without PETSc)");
     } else if (args.command == "run") {
       code = run(args, rank);
+    } else if (args.command == "balance") {
+      if (rank == 0) code = balance_report({args.case_file, args.bodies, args.sets, args.ranks, args.json});
     } else if (args.command == "--version") {
       if (rank == 0) std::printf("tessera %s\n", kTesseraVersion);
     } else if (args.command == "--help" || args.command == "help") {
       if (rank == 0) std::printf("%s", kUsage);
     } else {
-      throw InputError("(command line)", args.command, std::string("a command: run or info\n") + kUsage);
+      throw InputError("(command line)", args.command, std::string("a command: run, balance or info\n") + kUsage);
     }
   } catch (const InputError& e) {
     // Input is read identically on every rank, so every rank throws: report once, exit cleanly.

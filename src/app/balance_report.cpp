@@ -1,0 +1,93 @@
+// SPDX-License-Identifier: MIT
+#include "app/balance_report.hpp"
+
+#include <mpi.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "core/balance.hpp"
+#include "core/config.hpp"
+#include "core/decomposition.hpp"
+#include "core/errors.hpp"
+#include "core/h5_file.hpp"
+
+namespace tessera {
+
+int balance_report(const BalanceRequest& rq) {
+  if (rq.case_file.empty() || rq.bodies_file.empty() || rq.ranks.empty())
+    throw InputError("(command line)", "", "tessera balance CASE.yaml --bodies CHECKPOINT.h5 --ranks 4,16,64");
+  const Config config = Config::load(rq.case_file, rq.sets);
+  const ConfigNode root = config.root();
+  const ConfigNode domain = root.section("domain");
+  const Vec3 lo = domain.vec3("box_min", Dim::length), hi = domain.vec3("box_max", Dim::length);
+  std::array<int, 3> requested{0, 0, 0};
+  if (domain.has("process_grid")) {
+    const auto g = domain.integers("process_grid", 3, 0, 1 << 20);
+    for (int d = 0; d < 3; ++d) requested[d] = static_cast<int>(g[d]);
+  }
+  Vec3 spacing{};
+  if (const auto fluid = root.optional_section("fluid")) {
+    const auto cells = fluid->integers("cells", 3, 1, 1 << 24);
+    for (int d = 0; d < 3; ++d) spacing[d] = (hi[d] - lo[d]) / static_cast<double>(cells[d]);
+  }
+  double skin = -1;
+  if (const auto solid = root.optional_section("solid")) {
+    if (const auto plane = solid->optional_section("plane")) {
+      const std::string n = plane->choice("normal", {"x", "y", "z"});
+      requested[n[0] - 'x'] = 1;
+    }
+    if (solid->has("neighbor_skin")) skin = solid->real("neighbor_skin", Dim::length, Range::positive());
+  }
+
+  // Bodies: the checkpoint's packed rows (ParticleStore::pack: radius in column 3, x in 6-8).
+  const H5File f = H5File::open_read(rq.bodies_file, MPI_COMM_SELF);
+  int cols = 0;
+  const std::vector<double> rows = f.read_all<double>("bodies", cols);
+  if (cols < 9) throw InputError("--bodies", rq.bodies_file, "a DEM checkpoint (its 'bodies' rows)");
+  std::vector<WorkSample> work;
+  double r_max = 0, r_min = 1e300;
+  for (std::size_t i = 0; i + static_cast<std::size_t>(cols) <= rows.size(); i += static_cast<std::size_t>(cols)) {
+    work.push_back({{rows[i + 6], rows[i + 7], rows[i + 8]}, 1.0});
+    r_max = std::max(r_max, rows[i + 3]), r_min = std::min(r_min, rows[i + 3]);
+  }
+  if (work.empty()) throw InputError("--bodies", rq.bodies_file, "a checkpoint with bodies");
+  if (skin < 0) skin = 0.5 * r_min;  // DemSettings' default
+  const double reach = 2 * r_max + skin;
+
+  nlohmann::json table = nlohmann::json::array();
+  std::printf("%zu bodies in [%g %g %g] - [%g %g %g] m; slabs at least %.4g m (2 r_max + skin)%s\n", work.size(), lo.x,
+              lo.y, lo.z, hi.x, hi.y, hi.z, reach, spacing.x > 0 ? ", on the fluid's cell faces" : "");
+  std::printf("%6s %10s %16s %16s   balanced cuts (x | y | z)\n", "ranks", "grid", "equal slabs", "balanced");
+  for (const int p : rq.ranks) {
+    const auto dims = Decomposition::choose_dims(p, hi - lo, requested);
+    Vec3 min_width;
+    for (int d = 0; d < 3; ++d) min_width[d] = std::max(reach, spacing[d]);
+    for (int d = 0; d < 3; ++d)
+      if (dims[d] > 1 && dims[d] * min_width[d] > hi[d] - lo[d])
+        throw InputError("--ranks", std::to_string(p),
+                         "rank counts whose slabs are wider than the contact reach along axis " + std::to_string(d));
+    const double equal = imbalance(rank_work(work, dims, equal_cuts(lo, hi, dims)));
+    const CutPlanes cuts = balanced_cuts(work, lo, hi, dims, min_width, spacing);
+    const double balanced = imbalance(rank_work(work, dims, cuts));
+    std::string text;
+    for (int d = 0; d < 3; ++d) {
+      if (d) text += " |";
+      for (const double c : cuts[d]) text += " " + std::to_string(c);
+    }
+    std::printf("%6d %4dx%dx%-3d %16.3f %16.3f  %s\n", p, dims[0], dims[1], dims[2], equal, balanced, text.c_str());
+    table.push_back({{"ranks", p}, {"grid", dims}, {"imbalance_equal", equal}, {"imbalance_balanced", balanced},
+                     {"cuts", {cuts[0], cuts[1], cuts[2]}}});
+  }
+  if (!rq.json_out.empty()) {
+    std::ofstream out(rq.json_out);
+    out << nlohmann::json{{"case", rq.case_file}, {"bodies", rq.bodies_file}, {"count", work.size()}, {"table", table}}
+               .dump(2)
+        << "\n";
+  }
+  return 0;
+}
+
+}  // namespace tessera

@@ -1,0 +1,25 @@
+// SPDX-License-Identifier: MIT
+// `tessera balance CASE.yaml --bodies CHECKPOINT.h5 --ranks 4,16,64` (issue 19): how evenly the
+// bodies of a checkpoint would spread over P ranks of the case's box, with equal slabs and with
+// balanced cut planes (core/balance.hpp), computed on one process without running P. The process
+// grid is the one a run on P ranks would choose (Decomposition::choose_dims, with the case's
+// domain.process_grid and plane mode); slabs are kept at least the contact reach wide (2 r_max plus
+// the skin) and, in flow scenes, on the fluid's cell faces. The work is one per body: the DEM's
+// cost is nearly proportional to the bodies in a dense bed.
+#pragma once
+#include <string>
+#include <vector>
+
+namespace tessera {
+
+struct BalanceRequest {
+  std::string case_file, bodies_file;
+  std::vector<std::string> sets;
+  std::vector<int> ranks;
+  std::string json_out;  // optional: the table as JSON
+};
+
+// Prints the table; returns 0.
+int balance_report(const BalanceRequest& request);
+
+}  // namespace tessera

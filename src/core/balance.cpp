@@ -1,0 +1,97 @@
+// SPDX-License-Identifier: MIT
+#include "core/balance.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+namespace tessera {
+
+std::vector<double> balanced_cuts(const std::vector<double>& x, const std::vector<double>& weight, double lo,
+                                  double hi, int parts, double min_width, double spacing) {
+  if (parts < 1 || !(hi > lo)) throw std::invalid_argument("balanced_cuts: at least one part of a non-empty range");
+  std::vector<double> cuts;
+  if (parts == 1) return cuts;
+  if (parts * min_width > hi - lo)
+    throw std::invalid_argument("balanced_cuts: " + std::to_string(parts) + " slabs of at least " +
+                                std::to_string(min_width) + " do not fit in " + std::to_string(hi - lo));
+  // The marginal distribution: samples in position order, the cumulative weight.
+  std::vector<std::size_t> order(x.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return x[a] < x[b]; });
+  double total = 0;
+  for (const double w : weight) total += w;
+  // Cut c at the position where the cumulative weight reaches c / parts of the total, midway
+  // between the two samples that straddle it (no samples: equal slabs).
+  std::size_t k = 0;
+  double below = 0;
+  for (int c = 1; c < parts; ++c) {
+    double at = lo + (hi - lo) * c / parts;
+    if (total > 0) {
+      const double target = total * c / parts;
+      while (k < order.size() && below + weight[order[k]] <= target) below += weight[order[k++]];
+      const double left = k == 0 ? lo : std::clamp(x[order[k - 1]], lo, hi);
+      const double right = k < order.size() ? std::clamp(x[order[k]], lo, hi) : hi;
+      at = 0.5 * (left + right);
+    }
+    if (spacing > 0) at = lo + std::round((at - lo) / spacing) * spacing;
+    cuts.push_back(at);
+  }
+  // Widths: every slab at least min_width (and one spacing), pushing cuts up, then down from hi.
+  const double w = std::max(min_width, spacing);
+  for (int c = 0; c < parts - 1; ++c) {
+    const double prev = c == 0 ? lo : cuts[c - 1];
+    if (cuts[c] < prev + w) cuts[c] = spacing > 0 ? prev + std::ceil(w / spacing - 1e-9) * spacing : prev + w;
+  }
+  for (int c = parts - 2; c >= 0; --c) {
+    const double next = c == parts - 2 ? hi : cuts[c + 1];
+    if (cuts[c] > next - w) cuts[c] = spacing > 0 ? next - std::ceil(w / spacing - 1e-9) * spacing : next - w;
+  }
+  return cuts;
+}
+
+CutPlanes balanced_cuts(const std::vector<WorkSample>& work, const Vec3& lo, const Vec3& hi, std::array<int, 3> dims,
+                        const Vec3& min_width, const Vec3& spacing) {
+  CutPlanes cuts;
+  std::vector<double> x(work.size()), w(work.size());
+  for (std::size_t i = 0; i < work.size(); ++i) w[i] = work[i].weight;
+  for (int d = 0; d < 3; ++d) {
+    for (std::size_t i = 0; i < work.size(); ++i) x[i] = work[i].x[d];
+    cuts[d] = balanced_cuts(x, w, lo[d], hi[d], dims[d], min_width[d], spacing[d]);
+  }
+  return cuts;
+}
+
+CutPlanes equal_cuts(const Vec3& lo, const Vec3& hi, std::array<int, 3> dims) {
+  CutPlanes cuts;
+  for (int d = 0; d < 3; ++d)
+    for (int c = 1; c < dims[d]; ++c) cuts[d].push_back(lo[d] + (hi[d] - lo[d]) * c / dims[d]);
+  return cuts;
+}
+
+std::vector<double> rank_work(const std::vector<WorkSample>& work, std::array<int, 3> dims,
+                              const CutPlanes& interior) {
+  std::vector<double> per_rank(static_cast<std::size_t>(dims[0]) * dims[1] * dims[2], 0.0);
+  for (const auto& s : work) {
+    std::size_t r = 0, stride = 1;
+    for (int d = 0; d < 3; ++d) {
+      const auto& c = interior[d];
+      const auto coord = static_cast<std::size_t>(std::upper_bound(c.begin(), c.end(), s.x[d]) - c.begin());
+      r += coord * stride;
+      stride *= static_cast<std::size_t>(dims[d]);
+    }
+    per_rank[r] += s.weight;
+  }
+  return per_rank;
+}
+
+double imbalance(const std::vector<double>& per_rank) {
+  if (per_rank.empty()) return 1;
+  double sum = 0, most = 0;
+  for (const double w : per_rank) sum += w, most = std::max(most, w);
+  return sum > 0 ? most * static_cast<double>(per_rank.size()) / sum : 1;
+}
+
+}  // namespace tessera

@@ -1,0 +1,42 @@
+// SPDX-License-Identifier: MIT
+// Balanced cut planes for the Cartesian process grid (issue 19). The grid keeps its topology
+// (dims[d] slabs along each direction, every rank the product of one slab per direction); only the
+// interior cut planes move. Along each direction they are put at the weighted quantiles of the
+// work's marginal distribution, so that every slab holds the same share of the work; the per-rank
+// work of the product grid then follows (exactly balanced when the work separates by direction,
+// as a bed filling the bottom of a box does).
+//
+// Work is a set of samples (a position and a weight: a body and its cost, a cell and its cost).
+// Constraints: a slab is at least `min_width` wide (the DEM's contact reach, one flow cell), and
+// with a `spacing` > 0 the cuts lie on multiples of it from the box's low side (the flow's cell
+// faces: a DMDA owns whole cells).
+#pragma once
+#include <array>
+#include <vector>
+
+#include "core/vec3.hpp"
+
+namespace tessera {
+
+struct WorkSample {
+  Vec3 x;
+  double weight = 1;
+};
+
+// Interior cuts (parts - 1 values, increasing, strictly inside (lo, hi)) along one direction.
+std::vector<double> balanced_cuts(const std::vector<double>& x, const std::vector<double>& weight, double lo,
+                                  double hi, int parts, double min_width = 0, double spacing = 0);
+
+using CutPlanes = std::array<std::vector<double>, 3>;  // interior cuts per direction (Decomposition's)
+CutPlanes balanced_cuts(const std::vector<WorkSample>& work, const Vec3& lo, const Vec3& hi, std::array<int, 3> dims,
+                        const Vec3& min_width = {}, const Vec3& spacing = {});
+CutPlanes equal_cuts(const Vec3& lo, const Vec3& hi, std::array<int, 3> dims);
+
+// The work of each rank of the grid (rank order: x fastest) for interior cuts; a sample outside the
+// box goes to the boundary slab, as Decomposition::owner_coord does.
+std::vector<double> rank_work(const std::vector<WorkSample>& work, std::array<int, 3> dims,
+                              const CutPlanes& interior);
+// Largest over mean (1 = balanced).
+double imbalance(const std::vector<double>& per_rank);
+
+}  // namespace tessera

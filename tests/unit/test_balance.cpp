@@ -1,0 +1,94 @@
+// SPDX-License-Identifier: MIT
+// Balanced cut planes (core/balance.hpp, issue 19): the cut search equalises a known cost field to
+// within one cell layer, respects the slabs' smallest width and the cell faces, and balances a bed
+// that fills the bottom of a box where equal slabs leave the top ranks idle.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/balance.hpp"
+
+using namespace tessera;
+
+// Cost per cell layer along z falling as exp(-z / 0.15) over 64 layers of a unit box (the work of a
+// bed that thins upwards), one sample per cell centre: 4 slabs on cell faces. Each slab's cost is
+// within one cell layer's cost of the mean (the best a cell-aligned cut can do), and the cuts lie
+// on cell faces.
+TEST(Balance, EqualisesAKnownCostFieldToOneCellLayer) {
+  const int n = 64;
+  const double h = 1.0 / n;
+  std::vector<double> x, w;
+  double total = 0;
+  for (int k = 0; k < n; ++k) {
+    const double z = (k + 0.5) * h, cost = std::exp(-z / 0.15);
+    for (int s = 0; s < 8; ++s) x.push_back(z), w.push_back(cost / 8);  // 8 cells per layer
+    total += cost;
+  }
+  const auto cuts = balanced_cuts(x, w, 0.0, 1.0, 4, 2 * h, h);
+  ASSERT_EQ(cuts.size(), 3u);
+  std::vector<double> slab(4, 0.0);
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    int c = 0;
+    while (c < 3 && x[i] >= cuts[c]) ++c;
+    slab[c] += w[i];
+  }
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(cuts[c] / h, std::round(cuts[c] / h), 1e-9) << "on a cell face";
+  // A slab may be off by the layer at each of its cuts (a cut moves by at most one layer from the
+  // ideal position when it goes to a cell face).
+  auto layer_at = [&](double cut) {  // the heavier of the two layers that meet at the cut
+    const int k = int(std::round(cut / h));
+    return std::max(std::exp(-(k - 0.5) * h / 0.15), std::exp(-(k + 0.5) * h / 0.15));
+  };
+  for (int c = 0; c < 4; ++c) {
+    const double allowed = (c > 0 ? layer_at(cuts[c - 1]) : 0.0) + (c < 3 ? layer_at(cuts[c]) : 0.0);
+    std::printf("slab %d: cost %.4f of mean %.4f (the layers at its cuts %.4f)\n", c, slab[c], total / 4, allowed);
+    EXPECT_LE(std::abs(slab[c] - total / 4), allowed) << c;
+  }
+  // Equal slabs put most of the work in the lowest.
+  std::vector<double> equal(4, 0.0);
+  for (std::size_t i = 0; i < x.size(); ++i) equal[std::min(3, int(x[i] * 4))] += w[i];
+  EXPECT_GT(imbalance(equal), 2.0);
+  EXPECT_LT(imbalance(slab), 1.1);
+}
+
+// A bed of bodies filling the bottom 30 % of a box on a 2 x 2 x 2 grid: equal slabs leave the four
+// upper ranks without work (imbalance 2); balanced cuts share it (a lattice: exact up to a row).
+TEST(Balance, ABedInTheBottomOfABox) {
+  std::vector<WorkSample> bed;
+  for (int k = 0; k < 15; ++k)
+    for (int j = 0; j < 50; ++j)
+      for (int i = 0; i < 50; ++i) bed.push_back({{(i + 0.5) / 50, (j + 0.5) / 50, (k + 0.5) / 50}, 1.0});
+  const Vec3 lo{0, 0, 0}, hi{1, 1, 1};
+  const std::array<int, 3> dims{2, 2, 2};
+  const double equal = imbalance(rank_work(bed, dims, equal_cuts(lo, hi, dims)));
+  const CutPlanes cuts = balanced_cuts(bed, lo, hi, dims);
+  const double balanced = imbalance(rank_work(bed, dims, cuts));
+  std::printf("bed in the bottom 30 %%, 2x2x2: imbalance %.3f with equal slabs, %.3f balanced (z cut %.4f)\n", equal,
+              balanced, cuts[2][0]);
+  EXPECT_DOUBLE_EQ(equal, 2.0);
+  EXPECT_LT(balanced, 1.0 + 2.0 / 15);  // one row of 15 in z at most
+  EXPECT_NEAR(cuts[0][0], 0.5, 1e-12);  // x and y: uniform, the middle
+  EXPECT_NEAR(cuts[2][0], 0.15, 1.0 / 50);
+}
+
+// All the work at one point: the cuts still leave every slab its smallest width, inside the box.
+TEST(Balance, SlabsKeepTheirSmallestWidth) {
+  const std::vector<double> x(100, 0.5), w(100, 1.0);
+  const auto cuts = balanced_cuts(x, w, 0.0, 1.0, 4, 0.2);
+  ASSERT_EQ(cuts.size(), 3u);
+  double prev = 0.0;
+  for (const double c : cuts) {
+    EXPECT_GE(c - prev, 0.2 - 1e-12);
+    prev = c;
+  }
+  EXPECT_GE(1.0 - prev, 0.2 - 1e-12);
+  EXPECT_THROW(balanced_cuts(x, w, 0.0, 1.0, 6, 0.2), std::invalid_argument);
+}
+
+// No work: equal slabs.
+TEST(Balance, NoWorkGivesEqualSlabs) {
+  const auto cuts = balanced_cuts({}, {}, 0.0, 3.0, 3);
+  ASSERT_EQ(cuts.size(), 2u);
+  EXPECT_DOUBLE_EQ(cuts[0], 1.0);
+  EXPECT_DOUBLE_EQ(cuts[1], 2.0);
+}
