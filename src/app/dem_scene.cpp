@@ -46,6 +46,37 @@ DemScene::DemScene(const ConfigNode& root, MPI_Comm comm, const std::string& cas
   check_interval_ = run.real("check_interval", Dim::time, Range::positive(), 1e-3);
   max_overlap_ratio_ = run.real("max_overlap_ratio", Dim::none, Range{0.0, 2.0, true, false}, max_overlap_ratio_);
   poll_every_ = 100;
+  if (const auto b = root.optional_section("balance")) {
+    balance_.enabled = b->flag("enabled", false);
+    balance_.interval = b->integer("interval", 1, 1L << 40, balance_.interval);
+    balance_.threshold = b->real("threshold", Dim::none, Range::closed(1.0, 1e9), balance_.threshold);
+  }
+}
+
+void DemScene::balance_if_due() {
+  if (!balance_.enabled || decomp_->size() == 1 || dem_->steps() % balance_.interval != 0) return;
+  MPI_Comm comm = decomp_->comm();
+  auto local_work = [](const std::vector<WorkSample>& w) {
+    double sum = 0;
+    for (const auto& s : w) sum += s.weight;
+    return sum;
+  };
+  std::vector<WorkSample> work = dem_->work();
+  const double before = imbalance(comm, local_work(work));
+  if (balance_.checks++ == 0) balance_.first_imbalance = before;
+  if (before <= balance_.threshold) return;
+  // Slabs stay wider than the contact reach (DemSolver's check is strict), by a bin of the search.
+  const Vec3 lo = decomp_->global_lo(), hi = decomp_->global_hi();
+  Vec3 min_width;
+  for (int d = 0; d < 3; ++d) min_width[d] = dem_->contact_reach() + 2 * (hi[d] - lo[d]) / 4096;
+  for (int d = 0; d < 3; ++d)
+    if (decomp_->dims()[d] * min_width[d] >= hi[d] - lo[d]) return;  // no room to move the cuts
+  decomp_->set_cuts(balanced_cuts(comm, work, lo, hi, decomp_->dims(), min_width));
+  dem_->rebalance();
+  const double after = imbalance(comm, local_work(dem_->work()));
+  ++balance_.rebalances;
+  balance_.last_before = before, balance_.last_after = after;
+  if (balance_.events.size() < 100) balance_.events.push_back({{"step", dem_->steps()}, {"before", before}, {"after", after}});
 }
 
 std::string DemScene::resolve_path(const std::string& p) const {
@@ -117,6 +148,7 @@ void DemScene::step(const RunOptions& opt) {
 }
 
 bool DemScene::after_step(const RunOptions& opt) {
+  balance_if_due();
   if (!checks_.due(dem_->time(), dem_->dt())) return false;
   dem_->complete_step();
   const DemStats stats = dem_->stats();
@@ -167,6 +199,18 @@ void DemScene::summarise(nlohmann::json& s) {
   s["migrations"] = counts[2];       // bodies that changed owner, this run
   // Touching pairs whose bodies have different owners, summed over the run.check_interval checks.
   s["cross_rank_contacts_checked"] = cross_rank_contacts_;
+  // The ranks' work (DemSolver::work: bodies and their listed contacts) at the end, and what the
+  // balance did.
+  {
+    double local = 0;
+    for (const auto& w : dem_->work()) local += w.weight;
+    s["imbalance"] = imbalance(comm, local);  // the final cut planes: "cuts" (run_loop.cpp)
+    if (balance_.enabled)
+      s["balance"] = {{"interval", balance_.interval},         {"threshold", balance_.threshold},
+                      {"checks", balance_.checks},             {"rebalances", balance_.rebalances},
+                      {"first_imbalance", balance_.first_imbalance}, {"last_before", balance_.last_before},
+                      {"last_after", balance_.last_after},     {"events", balance_.events}};
+  }
   s["quantities"] = q;
   // Mesh walls: the load the bodies put on each at the last step, and a pivot's angle and speed.
   dem_->sum_mesh_loads();

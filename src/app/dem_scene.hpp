@@ -77,6 +77,19 @@ class DemScene : public SteppedScene {
   void summarise(nlohmann::json& s) override;
   PhaseTimers& phase_timers() override { return dem_->timers(); }
 
+  // Load balance (issue 19, case section `balance`): every `interval` steps the ranks' work
+  // (DemSolver::work) is compared; above `threshold` (largest over mean) the cut planes move to
+  // balance it (core/balance.hpp) and the bodies follow (DemSolver::rebalance).
+  struct Balance {
+    bool enabled = false;
+    long interval = 1000;
+    double threshold = 1.1;
+    long checks = 0, rebalances = 0;
+    double first_imbalance = 0, last_before = 0, last_after = 0;
+    nlohmann::json events = nlohmann::json::array();  // the first 100 rebalances: step, before, after
+  } balance_;
+  void balance_if_due();
+
   std::unique_ptr<SnapshotSeries> snapshots_;
   Schedule checks_;
   long cross_rank_contacts_ = 0;  // summed over the checks: evidence that the ranks shared contacts

@@ -94,4 +94,32 @@ double imbalance(const std::vector<double>& per_rank) {
   return sum > 0 ? most * static_cast<double>(per_rank.size()) / sum : 1;
 }
 
+CutPlanes balanced_cuts(MPI_Comm comm, const std::vector<WorkSample>& local, const Vec3& lo, const Vec3& hi,
+                        std::array<int, 3> dims, const Vec3& min_width, const Vec3& spacing, int bins) {
+  CutPlanes cuts;
+  std::vector<double> hist(static_cast<std::size_t>(bins)), x(hist.size());
+  for (int d = 0; d < 3; ++d) {
+    if (dims[d] == 1) continue;
+    std::fill(hist.begin(), hist.end(), 0.0);
+    const double width = (hi[d] - lo[d]) / bins;
+    for (const auto& s : local) {
+      const int b = std::clamp(static_cast<int>((s.x[d] - lo[d]) / width), 0, bins - 1);
+      hist[static_cast<std::size_t>(b)] += s.weight;
+    }
+    MPI_Allreduce(MPI_IN_PLACE, hist.data(), bins, MPI_DOUBLE, MPI_SUM, comm);
+    for (int b = 0; b < bins; ++b) x[static_cast<std::size_t>(b)] = lo[d] + (b + 0.5) * width;
+    cuts[d] = balanced_cuts(x, hist, lo[d], hi[d], dims[d], min_width[d], spacing[d]);
+  }
+  return cuts;
+}
+
+double imbalance(MPI_Comm comm, double local_work) {
+  double most = local_work, sum = local_work;
+  int size = 1;
+  MPI_Comm_size(comm, &size);
+  MPI_Allreduce(MPI_IN_PLACE, &most, 1, MPI_DOUBLE, MPI_MAX, comm);
+  MPI_Allreduce(MPI_IN_PLACE, &sum, 1, MPI_DOUBLE, MPI_SUM, comm);
+  return sum > 0 ? most * size / sum : 1;
+}
+
 }  // namespace tessera

@@ -11,6 +11,8 @@
 // with a `spacing` > 0 the cuts lie on multiples of it from the box's low side (the flow's cell
 // faces: a DMDA owns whole cells).
 #pragma once
+#include <mpi.h>
+
 #include <array>
 #include <vector>
 
@@ -38,5 +40,14 @@ std::vector<double> rank_work(const std::vector<WorkSample>& work, std::array<in
                               const CutPlanes& interior);
 // Largest over mean (1 = balanced).
 double imbalance(const std::vector<double>& per_rank);
+
+// Collective (every rank its own samples): the cuts from per-direction histograms of `bins` bins
+// over the box, summed over the ranks. With whole-number weights the sums are exact, so every rank
+// (and every rank count) gets the same cuts; a cut's resolution is a bin.
+CutPlanes balanced_cuts(MPI_Comm comm, const std::vector<WorkSample>& local, const Vec3& lo, const Vec3& hi,
+                        std::array<int, 3> dims, const Vec3& min_width = {}, const Vec3& spacing = {},
+                        int bins = 4096);
+// Collective: the largest rank's work over the mean.
+double imbalance(MPI_Comm comm, double local_work);
 
 }  // namespace tessera

@@ -69,6 +69,27 @@ Decomposition::Decomposition(MPI_Comm comm, const Vec3& lo, const Vec3& hi, std:
   }
 }
 
+void Decomposition::set_cuts(const Cuts& interior) {
+  for (int d = 0; d < 3; ++d) {
+    const auto& c = interior[d];
+    if (static_cast<int>(c.size()) != dims_[d] - 1)
+      throw RunError("Decomposition::set_cuts: " + std::to_string(c.size()) + " cuts along axis " + std::to_string(d) +
+                     " for " + std::to_string(dims_[d]) + " sub-domains");
+    for (std::size_t i = 0; i < c.size(); ++i)
+      if (!(c[i] > (i ? c[i - 1] : global_lo_[d])) || !(c[i] < global_hi_[d]))
+        throw RunError("Decomposition::set_cuts: cuts along axis " + std::to_string(d) +
+                       " must increase strictly inside the box");
+  }
+  for (int d = 0; d < 3; ++d)
+    for (int i = 1; i < dims_[d]; ++i) cuts_[d][i] = interior[d][static_cast<std::size_t>(i - 1)];
+}
+
+Decomposition::Cuts Decomposition::interior_cuts() const {
+  Cuts c;
+  for (int d = 0; d < 3; ++d) c[d].assign(cuts_[d].begin() + 1, cuts_[d].end() - 1);
+  return c;
+}
+
 Decomposition::~Decomposition() {
   if (cart_ != MPI_COMM_NULL) MPI_Comm_free(&cart_);
 }

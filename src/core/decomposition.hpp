@@ -43,6 +43,11 @@ class Decomposition {
   int owner_rank(const Vec3& p) const;
   // Cut planes along d: dims[d] + 1 values from global_lo[d] to global_hi[d].
   const std::vector<double>& cuts(int d) const { return cuts_[d]; }
+  // The interior cut planes (dims[d] - 1 per direction), and moving them (every rank alike, the
+  // same values; the grid's topology, ranks and neighbours stay). Whoever holds data by position
+  // moves it after (DemSolver::rebalance).
+  Cuts interior_cuts() const;
+  void set_cuts(const Cuts& interior);
 
   static std::array<int, 3> choose_dims(int size, const Vec3& extent, std::array<int, 3> requested);
 

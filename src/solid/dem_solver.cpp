@@ -212,17 +212,7 @@ void DemSolver::setup(bool fresh) {
   }
   dt_ = settings_.time_step ? *settings_.time_step : t_contact_ / settings_.steps_per_contact;
   skin_ = settings_.skin ? *settings_.skin : 0.5 * r_min;
-  // Ghosts come from face neighbours only: a sub-domain must be wider than the interaction reach.
-  // Every rank sees the same grid and radii, so all stop together here.
-  for (int d = 0; d < 3; ++d) {
-    const auto& cuts = decomp_.cuts(d);
-    for (std::size_t c = 0; c + 1 < cuts.size() && cuts.size() > 2; ++c)
-      if (cuts[c + 1] - cuts[c] <= 2 * r_max_ + skin_)
-        throw InputError("domain.process_grid", "",
-                         "fewer ranks along axis " + std::to_string(d) + ": sub-domains " +
-                             std::to_string(cuts[c + 1] - cuts[c]) + " m wide are narrower than the contact reach " +
-                             std::to_string(2 * r_max_ + skin_) + " m (2 r_max + skin)");
-  }
+  check_subdomain_widths();
 
   if (fresh) assign_morton_order(p_, decomp_);
   rebuild();
@@ -235,6 +225,44 @@ void DemSolver::setup(bool fresh) {
     pairs_.list().history = pair_history;
     p_.wall_history = wall_history;
   }
+}
+
+void DemSolver::check_subdomain_widths() const {
+  // Ghosts come from face neighbours only: a sub-domain must be wider than the interaction reach.
+  // Every rank sees the same grid and radii, so all stop together here.
+  for (int d = 0; d < 3; ++d) {
+    const auto& cuts = decomp_.cuts(d);
+    for (std::size_t c = 0; c + 1 < cuts.size() && cuts.size() > 2; ++c)
+      if (cuts[c + 1] - cuts[c] <= 2 * r_max_ + skin_)
+        throw InputError("domain.process_grid", "",
+                         "fewer ranks along axis " + std::to_string(d) + ": sub-domains " +
+                             std::to_string(cuts[c + 1] - cuts[c]) + " m wide are narrower than the contact reach " +
+                             std::to_string(2 * r_max_ + skin_) + " m (2 r_max + skin)");
+  }
+}
+
+std::vector<WorkSample> DemSolver::work() const {
+  std::vector<WorkSample> w(p_.owned);
+  for (std::size_t i = 0; i < p_.owned; ++i) w[i] = {p_.pos(i), 1.0};
+  const NeighborList& list = pairs_.list();
+  for (std::size_t k = 0; k < list.size(); ++k)
+    for (const std::size_t b : {entities_.body(list.first[k]), entities_.body(list.second[k])})
+      if (b < p_.owned) w[b].weight += 1.0;
+  return w;
+}
+
+void DemSolver::rebalance() {
+  check_subdomain_widths();
+  complete_step();  // no half-kick pending across the move
+  long bodies[2] = {static_cast<long>(p_.owned), 0};
+  migrate_until_settled_ = true;
+  rebuild();
+  migrate_until_settled_ = false;
+  bodies[1] = static_cast<long>(p_.owned);
+  MPI_Allreduce(MPI_IN_PLACE, bodies, 2, MPI_LONG, MPI_SUM, decomp_.comm());
+  if (bodies[0] != bodies[1])
+    throw RunError("rebalance at step " + std::to_string(steps_) + ": " + std::to_string(bodies[0]) +
+                   " bodies before the cut planes moved, " + std::to_string(bodies[1]) + " after");
 }
 
 HistoryMap DemSolver::histories() const {
@@ -277,6 +305,15 @@ void DemSolver::rebuild() {
   {
     auto t = timers_.scope("migration");
     halo_.migrate(p_, histories);
+    // After the cut planes moved a body may be several sub-domains from its owner: one face per
+    // pass (rebalance only; in a step a body moves less than a sub-domain).
+    while (migrate_until_settled_) {
+      int foreign = 0;
+      for (std::size_t i = 0; i < p_.owned && !foreign; ++i) foreign = !decomp_.owns(p_.pos(i));
+      MPI_Allreduce(MPI_IN_PLACE, &foreign, 1, MPI_INT, MPI_MAX, decomp_.comm());
+      if (!foreign) break;
+      halo_.migrate(p_, histories);
+    }
     sort_owned_by_order(p_);
   }
   for (const auto& [key, h] : histories)

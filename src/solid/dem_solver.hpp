@@ -32,6 +32,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "core/balance.hpp"
 #include "core/config.hpp"
 #include "core/decomposition.hpp"
 #include "core/exact_sum.hpp"
@@ -193,6 +194,17 @@ class DemSolver {
   void reverse_add_ghosts(std::vector<double>& values, int width) { halo_.reverse_add(values, width); }
   // Owners' values to their ghost copies (Halo::forward_values).
   void forward_to_ghosts(std::vector<double>& values, int width) { halo_.forward_values(values, width); }
+  // Load balance (issue 19). The work of each owned body, a count that is the same on every run:
+  // 1 plus the listed contact pairs it takes part in (element pairs for shaped bodies).
+  std::vector<WorkSample> work() const;
+  // Collective, between steps: the decomposition's cut planes moved (Decomposition::set_cuts, every
+  // rank alike). The bodies, their contact histories and every stage's list follow: a rebuild whose
+  // migration repeats until every body is with its new owner. Results do not change (bit for bit;
+  // in plane mode the discs' orientations fold their turns at the rebuild, which moves q's last
+  // bits and nothing else).
+  void rebalance();
+  // The narrowest sub-domain the contacts allow: 2 r_max + skin.
+  double contact_reach() const { return 2 * r_max_ + skin_; }
   // Collective: ghosts take their owners' x, v, w (and q) now, after an outside change of owned
   // bodies' velocities between steps (the coupling's momentum exchange).
   void refresh_ghosts() { halo_.forward(p_); }
@@ -224,6 +236,8 @@ class DemSolver {
   void refresh_moving_candidates();
   void find_moving_candidates();  // mesh and free-sphere candidates, then every coefficient index
   bool refresh_moving_ = false;
+  bool migrate_until_settled_ = false;  // rebalance: the migration repeats until every body is home
+  void check_subdomain_widths() const;
   std::vector<double> x_moving_build_;  // owned bodies at the last candidate search of moving walls
   // The half-kicks (and the drift) of the free spheres and the pivot meshes (dem_integrator.cpp).
   void kick_free_spheres(bool drift);
