@@ -50,6 +50,7 @@ DemScene::DemScene(const ConfigNode& root, MPI_Comm comm, const std::string& cas
     balance_.enabled = b->flag("enabled", false);
     balance_.interval = b->integer("interval", 1, 1L << 40, balance_.interval);
     balance_.threshold = b->real("threshold", Dim::none, Range::closed(1.0, 1e9), balance_.threshold);
+    balance_.measure_time = b->choice("measure", {"counts", "time"}, "counts") == "time";
   }
 }
 
@@ -62,6 +63,15 @@ void DemScene::balance_if_due() {
     return sum;
   };
   std::vector<WorkSample> work = dem_->work();
+  if (balance_.measure_time) {
+    // The rank's busy seconds since the last check (not its waits), over its bodies by their counts.
+    double busy = 0;
+    for (const char* phase : {"integrate", "neighbor", "migration", "ghost_comm", "contact_forces", "wall_forces"})
+      busy += dem_->timers().total(phase);
+    const double since = busy - balance_.busy_at_check, counts = local_work(work);
+    balance_.busy_at_check = busy;
+    for (auto& w : work) w.weight *= counts > 0 ? since / counts : 0.0;
+  }
   const double before = imbalance(comm, local_work(work));
   if (balance_.checks++ == 0) balance_.first_imbalance = before;
   if (before <= balance_.threshold) return;
@@ -71,12 +81,20 @@ void DemScene::balance_if_due() {
   for (int d = 0; d < 3; ++d) min_width[d] = dem_->contact_reach() + 2 * (hi[d] - lo[d]) / 4096;
   for (int d = 0; d < 3; ++d)
     if (decomp_->dims()[d] * min_width[d] >= hi[d] - lo[d]) return;  // no room to move the cuts
-  decomp_->set_cuts(balanced_cuts(comm, work, lo, hi, decomp_->dims(), min_width));
+  CutPlanes cuts = balanced_cuts(comm, work, lo, hi, decomp_->dims(), min_width);
+  if (balance_.measure_time)  // sums of measured seconds: rank 0's cuts for all, whatever the rounding
+    for (auto& c : cuts) MPI_Bcast(c.data(), static_cast<int>(c.size()), MPI_DOUBLE, 0, comm);
+  decomp_->set_cuts(cuts);
   dem_->rebalance();
-  const double after = imbalance(comm, local_work(dem_->work()));
+  // Counts: the new cuts' imbalance now; time: known at the next check (its `before`).
+  const double after = balance_.measure_time ? before : imbalance(comm, local_work(dem_->work()));
   ++balance_.rebalances;
   balance_.last_before = before, balance_.last_after = after;
-  if (balance_.events.size() < 100) balance_.events.push_back({{"step", dem_->steps()}, {"before", before}, {"after", after}});
+  if (balance_.events.size() < 100) {
+    nlohmann::json e{{"step", dem_->steps()}, {"before", before}};
+    if (!balance_.measure_time) e["after"] = after;
+    balance_.events.push_back(e);
+  }
 }
 
 std::string DemScene::resolve_path(const std::string& p) const {
@@ -206,10 +224,12 @@ void DemScene::summarise(nlohmann::json& s) {
     for (const auto& w : dem_->work()) local += w.weight;
     s["imbalance"] = imbalance(comm, local);  // the final cut planes: "cuts" (run_loop.cpp)
     if (balance_.enabled)
-      s["balance"] = {{"interval", balance_.interval},         {"threshold", balance_.threshold},
+      s["balance"] = {{"measure", balance_.measure_time ? "time" : "counts"},
+                      {"interval", balance_.interval},         {"threshold", balance_.threshold},
                       {"checks", balance_.checks},             {"rebalances", balance_.rebalances},
                       {"first_imbalance", balance_.first_imbalance}, {"last_before", balance_.last_before},
-                      {"last_after", balance_.last_after},     {"events", balance_.events}};
+                      {"events", balance_.events}};
+    if (balance_.enabled && !balance_.measure_time) s["balance"]["last_after"] = balance_.last_after;
   }
   s["quantities"] = q;
   // Mesh walls: the load the bodies put on each at the last step, and a pivot's angle and speed.
