@@ -223,6 +223,20 @@ void DemScene::summarise(nlohmann::json& s) {
     double local = 0;
     for (const auto& w : dem_->work()) local += w.weight;
     s["imbalance"] = imbalance(comm, local);  // the final cut planes: "cuts" (run_loop.cpp)
+    // Per rank, in rank order (the timers' per_rank beside them): bodies, work, halo bytes sent.
+    const int size = decomp_->size();
+    const double mine[3] = {static_cast<double>(dem_->particles().owned), local,
+                            static_cast<double>(dem_->halo_bytes_sent())};
+    std::vector<double> all(3 * static_cast<std::size_t>(size));
+    MPI_Allgather(mine, 3, MPI_DOUBLE, all.data(), 3, MPI_DOUBLE, comm);
+    nlohmann::json per_rank{{"bodies", nlohmann::json::array()}, {"work", nlohmann::json::array()},
+                            {"halo_bytes_sent", nlohmann::json::array()}};
+    for (int r = 0; r < size; ++r) {
+      per_rank["bodies"].push_back(static_cast<long>(all[3 * r]));
+      per_rank["work"].push_back(all[3 * r + 1]);
+      per_rank["halo_bytes_sent"].push_back(static_cast<long>(all[3 * r + 2]));
+    }
+    s["per_rank"] = per_rank;
     if (balance_.enabled)
       s["balance"] = {{"measure", balance_.measure_time ? "time" : "counts"},
                       {"interval", balance_.interval},         {"threshold", balance_.threshold},

@@ -107,7 +107,7 @@ nlohmann::json SteppedScene::run(const RunOptions& opt, const nlohmann::json& re
   s["wall_seconds"] = wall_seconds;
   nlohmann::json timers;
   for (const auto& [phase, t] : phase_timers().reduce(comm))
-    timers[phase] = {{"min", t.min}, {"avg", t.avg}, {"max", t.max}};
+    timers[phase] = {{"min", t.min}, {"avg", t.avg}, {"max", t.max}, {"per_rank", t.per_rank}};
   s["timers"] = timers;
   s["case"] = resolved_case;
   if (root) write_file_atomically(opt.output_dir + "/summary.json", s.dump(2) + "\n");

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "core/timers.hpp"
 
+#include <algorithm>
 #include <set>
 
 namespace tessera {
@@ -31,9 +32,11 @@ std::vector<std::pair<std::string, PhaseTimers::Stats>> PhaseTimers::reduce(MPI_
   for (const auto& name : names) {
     const double t = total(name);
     Stats s;
-    MPI_Allreduce(&t, &s.min, 1, MPI_DOUBLE, MPI_MIN, comm);
-    MPI_Allreduce(&t, &s.max, 1, MPI_DOUBLE, MPI_MAX, comm);
-    MPI_Allreduce(&t, &s.avg, 1, MPI_DOUBLE, MPI_SUM, comm);
+    s.per_rank.resize(static_cast<std::size_t>(size));
+    MPI_Allgather(&t, 1, MPI_DOUBLE, s.per_rank.data(), 1, MPI_DOUBLE, comm);
+    s.min = *std::min_element(s.per_rank.begin(), s.per_rank.end());
+    s.max = *std::max_element(s.per_rank.begin(), s.per_rank.end());
+    for (const double r : s.per_rank) s.avg += r;
     s.avg /= size;
     out.emplace_back(name, s);
   }

@@ -15,6 +15,7 @@ class PhaseTimers {
  public:
   struct Stats {
     double min = 0, avg = 0, max = 0;
+    std::vector<double> per_rank;  // every rank's seconds, in rank order
   };
 
   void add(const std::string& phase, double seconds);
