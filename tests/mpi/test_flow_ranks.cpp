@@ -17,6 +17,7 @@
 #include "core/h5_file.hpp"
 #include "fluid/flow_solver.hpp"
 #include "support/flow_shapes.hpp"
+#include "support/taylor_green.hpp"
 #include "support/scene_runs.hpp"
 
 using namespace tessera;
@@ -242,26 +243,12 @@ namespace {
 // 1e-12) on a communicator with the given process grid: u and v of every cell at t = 0.5, in global
 // cell order, on every rank of the communicator.
 std::vector<double> taylor_green_velocity(MPI_Comm comm, std::array<int, 3> dims) {
-  const double nu = 0.05, end = 0.5, L = 2 * M_PI;
   const int n = 32;
-  Decomposition decomp(comm, {0, 0, 0}, {L, L, L / n}, dims);
-  FlowSettings st;
-  st.cells = {n, n, 1};
-  for (auto& b : st.boundaries) b = {BoundaryKind::periodic, BoundaryKind::periodic};
-  st.boundaries[2] = {BoundaryKind::free_slip, BoundaryKind::free_slip};
-  st.gravity = {};
-  st.gas = {1.0, nu};
-  st.liquid = {1.0, nu};
-  st.poisson.rtol = 1e-12;
-  FlowSolver s(decomp, st);
+  Decomposition decomp(comm, {0, 0, 0}, {test::kTaylorGreenL, test::kTaylorGreenL, test::kTaylorGreenL / n}, dims);
+  const auto solver = test::taylor_green(decomp, n, 0.05);
+  FlowSolver& s = *solver;
   const FluidGrid& g = s.grid();
-  s.initialize([&](int i, int j, int k) {
-    const Vec3 x = g.centre(i, j, k);
-    return FlowSolver::CellState{0.0, {std::sin(x.x) * std::cos(x.y), -std::cos(x.x) * std::sin(x.y), 0}};
-  });
-  const double h = L / n;
-  const int steps = int(std::ceil(end / (0.25 * h * h)));
-  for (int t = 0; t < steps; ++t) s.advance(end / steps);
+  test::advance_taylor_green(s, n, 0.5);
   std::vector<double> field(2 * n * n, 0.0);
   for (int j = g.begin(1); j < g.end(1); ++j)
     for (int i = g.begin(0); i < g.end(0); ++i) {

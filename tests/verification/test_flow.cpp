@@ -20,6 +20,7 @@
 #include "fluid/flow_solver.hpp"
 #include "fluid/plic.hpp"
 #include "support/flow_shapes.hpp"
+#include "support/taylor_green.hpp"
 
 using namespace tessera;
 using tessera::test::sampled_fraction;
@@ -196,23 +197,10 @@ TEST(TaylorGreen, SpatialOrder) {
   for (int r = 0; r < 3; ++r) {
     const int n = sizes[r];
     Decomposition decomp(MPI_COMM_WORLD, {0, 0, 0}, {L, L, L / n});
-    FlowSettings st;
-    st.cells = {n, n, 1};
-    st.boundaries = all(BoundaryKind::periodic);
-    st.boundaries[2] = {BoundaryKind::free_slip, BoundaryKind::free_slip};
-    st.gravity = {};
-    st.gas = {1.0, nu};
-    st.liquid = {1.0, nu};
-    st.poisson.rtol = 1e-12;
-    FlowSolver s(decomp, st);
+    const auto solver = test::taylor_green(decomp, n, nu);
+    FlowSolver& s = *solver;
     const FluidGrid& g = s.grid();
-    s.initialize([&](int i, int j, int k) {
-      const Vec3 x = g.centre(i, j, k);
-      return FlowSolver::CellState{0.0, {std::sin(x.x) * std::cos(x.y), -std::cos(x.x) * std::sin(x.y), 0}};
-    });
-    const double h = L / n;
-    const int steps = int(std::ceil(end / (0.25 * h * h)));
-    for (int t = 0; t < steps; ++t) s.advance(end / steps);
+    test::advance_taylor_green(s, n, end);
     const double decay = std::exp(-2 * nu * end);
     double e2 = 0;
     for_owned(g, [&](int i, int j, int k, std::size_t c) {
