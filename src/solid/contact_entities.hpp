@@ -46,8 +46,7 @@ class ContactEntities {
   std::int64_t key(std::size_t e) const { return shaped_ ? e_key_[e] : p_.order[e]; }
   int material(std::size_t e) const { return p_.material[body(e)]; }
   double mass(std::size_t e) const { return p_.mass[body(e)]; }
-  // Shaped mode: per local body, its first element (size bodies + 1); per element, key and radius.
-  const std::vector<std::size_t>& first_element() const { return e_first_; }
+  // Shaped mode, for the list build: per element, its body, key and radius.
   const std::vector<std::int32_t>& element_body() const { return e_body_; }
   const std::vector<std::int64_t>& element_key() const { return e_key_; }
   const std::vector<double>& element_radius() const { return e_r_; }
@@ -118,7 +117,7 @@ class ContactEntities {
   std::vector<std::int32_t> e_body_;  // local body of each element
   std::vector<std::int64_t> e_key_;
   std::vector<double> e_r_;
-  std::vector<std::size_t> e_first_;
+  std::vector<std::size_t> e_first_;  // per local body: its first element (size bodies + 1)
   std::size_t e_owned_ = 0;
   std::vector<KernelGeometry> geometry_;
   std::vector<KernelMotion> motion_;

@@ -233,11 +233,11 @@ void DemSolver::check_subdomain_widths() const {
   for (int d = 0; d < 3; ++d) {
     const auto& cuts = decomp_.cuts(d);
     for (std::size_t c = 0; c + 1 < cuts.size() && cuts.size() > 2; ++c)
-      if (cuts[c + 1] - cuts[c] <= 2 * r_max_ + skin_)
+      if (cuts[c + 1] - cuts[c] <= contact_reach())
         throw InputError("domain.process_grid", "",
                          "fewer ranks along axis " + std::to_string(d) + ": sub-domains " +
                              std::to_string(cuts[c + 1] - cuts[c]) + " m wide are narrower than the contact reach " +
-                             std::to_string(2 * r_max_ + skin_) + " m (2 r_max + skin)");
+                             std::to_string(contact_reach()) + " m (2 r_max + skin)");
   }
 }
 
