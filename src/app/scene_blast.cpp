@@ -8,6 +8,7 @@
 // released faces), checkpoints, summary.json.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
@@ -213,8 +214,9 @@ void BlastScene::write_snapshot() {
   MPI_Barrier(comm);
   {
     H5File f = H5File::create(out_dir_ + "/" + name, comm);
-    std::vector<double> nodes, disp, vel, broken_faces(n, 0.0), level(n, 0.0);
+    std::vector<double> nodes, disp, vel, broken_faces(n, 0.0), level(n, 0.0), mesh_element(n);
     for (std::size_t e = 0; e < n; ++e) level[e] = solver_->levels().empty() ? 0.0 : solver_->levels()[e];
+    for (std::size_t e = 0; e < n; ++e) mesh_element[e] = b.mesh_index[e];  // the element in the mesh file
     std::vector<std::int64_t> tets;
     for (std::size_t e = 0; e < n; ++e) {
       for (int k = 0; k < 4; ++k) {
@@ -237,6 +239,7 @@ void BlastScene::write_snapshot() {
     f.write_rows("damage", damage.data(), n, 1);
     f.write_rows("broken_faces", broken_faces.data(), n, 1);
     f.write_rows("dt_level", level.data(), n, 1);
+    f.write_rows("mesh_element", mesh_element.data(), n, 1);
     // The released faces, as the master element holds them now: ParaView's crack surfaces.
     std::vector<double> crack_nodes;
     std::vector<std::int64_t> crack_tris;
@@ -274,7 +277,7 @@ void BlastScene::write_snapshot() {
     for (const char* v : {"displacement", "velocity"})
       grids << "    <Attribute Name=\"" << v << "\" AttributeType=\"Vector\" Center=\"Cell\">"
             << item(v, "Float", 3, N) << "</Attribute>\n";
-    for (const char* v : {"damage", "broken_faces", "dt_level"})
+    for (const char* v : {"damage", "broken_faces", "dt_level", "mesh_element"})
       grids << "    <Attribute Name=\"" << v << "\" AttributeType=\"Scalar\" Center=\"Cell\">"
             << item(v, "Float", 1, N) << "</Attribute>\n";
     grids << "   </Grid>\n";
@@ -345,6 +348,8 @@ void BlastScene::write_checkpoint(const std::string& path) {
     f.write_rows("contact_list_unlisted", unlisted.data(), root ? unlisted.size() : 0, 1);
     f.set_attribute("contact_list_cell_radius", list.cell_radius);
     f.write_rows("bonds", bonds.data(), nb, 10);
+    std::vector<std::int64_t> order(b.mesh_index.begin(), b.mesh_index.begin() + static_cast<std::ptrdiff_t>(n));
+    f.write_rows("mesh_index", order.data(), n, 1);  // the element order the rows follow
     f.set_attribute("time", time());
     f.set_attribute("steps", steps());
     f.set_attribute("probe_displacement", probe_displacement_);
@@ -366,6 +371,14 @@ void BlastScene::read_checkpoint(const std::string& path) {
   const std::vector<double> bonds = f.read_all<double>("bonds", cols);
   if (cols != 10 || bonds.size() != 10 * b.bonds.size())
     throw InputError("restart", path, "a checkpoint of this case's mesh (" + std::to_string(b.bonds.size()) + " bonds)");
+  // The rows follow the block's element order (Morton since 2026-11-30): a checkpoint written in
+  // another order would put every state on the wrong element.
+  const std::vector<std::int64_t> order = f.has("mesh_index") ? f.read_all<std::int64_t>("mesh_index", cols)
+                                                               : std::vector<std::int64_t>{};
+  if (!std::equal(order.begin(), order.end(), b.mesh_index.begin(), b.mesh_index.end()))
+    throw InputError("restart", path,
+                     "a checkpoint whose elements are in this build's order (Morton order of the centroids; "
+                     "this one was written by a build before 2026-11-30 or from another mesh)");
   std::vector<Vec3> x(b.size()), v(b.size()), L(b.size()), F(b.size()), T(b.size());
   std::vector<Quaternion> q(b.size());
   for (std::size_t e = 0; e < b.size(); ++e) {

@@ -4,10 +4,12 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <numeric>
 #include <string>
 #include <tuple>
 
 #include "core/errors.hpp"
+#include "core/morton.hpp"
 #include "solid/tet_mass_properties.hpp"
 
 namespace tessera {
@@ -26,9 +28,24 @@ void face_frame(const BondedBlock& b, int e, int f, Vec3& normal, Vec3& centroid
 BondedBlock build_bonded_block(const TetMesh& mesh, double density) {
   BondedBlock b;
   b.nodes = mesh.nodes;
-  b.tets = mesh.tetrahedra;
-  const std::size_t n = b.tets.size();
+  const std::size_t n = mesh.tetrahedra.size();
   if (n == 0) throw InputError("blast.mesh", "", "a mesh with tetrahedra (none found)");
+  // Elements by the Morton code of their vertices' mean in the nodes' box, ties by the file's order.
+  Vec3 lo = b.nodes.front(), hi = lo;
+  for (const Vec3& p : b.nodes)
+    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], p[d]), hi[d] = std::max(hi[d], p[d]);
+  std::vector<std::uint64_t> code(n);
+  for (std::size_t e = 0; e < n; ++e) {
+    Vec3 c{};
+    for (int k : mesh.tetrahedra[e]) c += b.nodes[static_cast<std::size_t>(k)];
+    code[e] = morton(c / 4.0, lo, hi);
+  }
+  b.mesh_index.resize(n);
+  std::iota(b.mesh_index.begin(), b.mesh_index.end(), 0);
+  std::stable_sort(b.mesh_index.begin(), b.mesh_index.end(),
+                   [&](int a, int c) { return code[static_cast<std::size_t>(a)] < code[static_cast<std::size_t>(c)]; });
+  b.tets.resize(n);
+  for (std::size_t e = 0; e < n; ++e) b.tets[e] = mesh.tetrahedra[static_cast<std::size_t>(b.mesh_index[e])];
   b.mass.resize(n), b.volume.resize(n), b.inertia.resize(n), b.x0.resize(n), b.q0.resize(n), b.vertices.resize(n);
   b.min_edge = 1e300;
   for (std::size_t e = 0; e < n; ++e) {

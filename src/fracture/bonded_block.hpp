@@ -2,7 +2,9 @@
 // A block meshed into tetrahedra, each a rigid element (docs/theory.md B1): its mass and principal
 // inertia (T10), its vertices in its body frame (origin at the centroid, principal axes), and the
 // faces: every face two elements share is a bond (master = the lower element index, as in the seed),
-// every other face is on the block's surface. Built identically on every rank from the mesh.
+// every other face is on the block's surface. Built identically on every rank from the mesh, with
+// the elements in the Morton (Z-order) of their centroids: an element's bonds and neighbours are
+// close in memory whatever order the mesher wrote (mesh_index maps back to the file's order).
 #pragma once
 #include <array>
 #include <vector>
@@ -35,6 +37,7 @@ struct SurfaceFace {
 struct BondedBlock {
   std::vector<Vec3> nodes;                      // the mesh's nodes (initial positions)
   std::vector<std::array<int, 4>> tets;         // mesh node indices per element
+  std::vector<int> mesh_index;                  // each element's index among the mesh file's tetrahedra
   std::vector<double> mass, volume;
   std::vector<Vec3> inertia;                    // principal moments
   std::vector<Vec3> x0;                         // initial centroids

@@ -6,6 +6,8 @@
 #include <numeric>
 #include <vector>
 
+#include "core/morton.hpp"
+
 namespace tessera {
 
 void sort_owned_by_order(ParticleStore& p) {
@@ -24,24 +26,6 @@ void sort_owned_by_order(ParticleStore& p) {
   p.ghosts = 0;
 }
 
-namespace {
-
-// Interleaves the low 21 bits of x, y, z (Morton / Z-order code).
-std::uint64_t morton(std::uint64_t x, std::uint64_t y, std::uint64_t z) {
-  auto spread = [](std::uint64_t v) {
-    v &= 0x1fffff;
-    v = (v | v << 32) & 0x1f00000000ffffULL;
-    v = (v | v << 16) & 0x1f0000ff0000ffULL;
-    v = (v | v << 8) & 0x100f00f00f00f00fULL;
-    v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
-    v = (v | v << 2) & 0x1249249249249249ULL;
-    return v;
-  };
-  return spread(x) | spread(y) << 1 | spread(z) << 2;
-}
-
-}  // namespace
-
 void assign_morton_order(ParticleStore& p, const Decomposition& decomp) {
   // Every body's Morton code in the global box, sorted globally with the id breaking ties; a body's
   // key is its rank in that sort. Gathered on rank 0: 16 bytes per body.
@@ -49,12 +33,7 @@ void assign_morton_order(ParticleStore& p, const Decomposition& decomp) {
   const Vec3 lo = decomp.global_lo(), hi = decomp.global_hi();
   std::vector<std::uint64_t> mine(2 * p.owned);
   for (std::size_t i = 0; i < p.owned; ++i) {
-    std::uint64_t q[3];
-    for (int d = 0; d < 3; ++d) {
-      const double t = (p.x[3 * i + d] - lo[d]) / (hi[d] - lo[d]);
-      q[d] = static_cast<std::uint64_t>(std::clamp(t, 0.0, 1.0) * 2097151.0);
-    }
-    mine[2 * i] = morton(q[0], q[1], q[2]);
+    mine[2 * i] = morton(Vec3{p.x[3 * i], p.x[3 * i + 1], p.x[3 * i + 2]}, lo, hi);
     mine[2 * i + 1] = static_cast<std::uint64_t>(p.id[i]);
   }
   int size = 1, rank = 0, n = static_cast<int>(mine.size());
