@@ -5,9 +5,11 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "app/blast_case.hpp"
 #include "core/balance.hpp"
 #include "core/config.hpp"
 #include "core/decomposition.hpp"
@@ -16,11 +18,55 @@
 
 namespace tessera {
 
+namespace {
+
+// The blast's elements (issue 19): each partition's work per rank at the start, from the levels a
+// run would choose (element_partition.hpp), on one process.
+int blast_balance_report(const BalanceRequest& rq, const ConfigNode& root) {
+  const BlastCase c = read_blast_case(root, std::filesystem::path(rq.case_file).parent_path().string());
+  const Decomposition one(MPI_COMM_SELF, c.lo, c.hi, {1, 1, 1});
+  const FractureSolver solver(one, build_bonded_block(c.mesh, c.settings.density), c.settings, c.hole);
+  const BondedBlock& block = solver.block();
+  std::printf("%zu elements, %zu bonds; work per macro step at the initial levels: %.0f element updates, %.0f bond "
+              "evaluations x %.1f\n",
+              block.size(), block.bonds.size(), [&] { double w = 0; for (double x : solver.work().element) w += x; return w; }(),
+              [&] { double w = 0; for (double x : solver.work().bond) w += x; return w / kBondCostPerUpdate; }(),
+              kBondCostPerUpdate);
+  std::printf("%6s %10s %12s %12s %12s %12s %12s %12s\n", "ranks", "grid", "slabs", "(cut bonds)", "balanced",
+              "(cut bonds)", "metis", "(cut bonds)");
+  nlohmann::json table = nlohmann::json::array();
+  for (const int p : rq.ranks) {
+    const auto dims = Decomposition::choose_dims(p, c.hi - c.lo, c.grid);
+    nlohmann::json row{{"ranks", p}, {"grid", dims}};
+    std::printf("%6d %4dx%dx%-3d", p, dims[0], dims[1], dims[2]);
+    for (const Partition how : {Partition::slabs, Partition::balanced, Partition::metis}) {
+      const std::vector<int> part = partition_elements(block, solver.work(), how, c.lo, c.hi, dims);
+      const std::vector<double> work = part_work(block, solver.work(), part, p);
+      const long cut = cut_bonds(block, part);
+      std::printf(" %12.3f %12ld", imbalance(work), cut);
+      row[partition_name(how)] = {{"imbalance", imbalance(work)}, {"cut_bonds", cut}, {"work_per_rank", work}};
+    }
+    std::printf("\n");
+    table.push_back(row);
+  }
+  if (!rq.json_out.empty()) {
+    std::ofstream out(rq.json_out);
+    out << nlohmann::json{{"case", rq.case_file}, {"elements", block.size()}, {"table", table}}.dump(2) << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
 int balance_report(const BalanceRequest& rq) {
-  if (rq.case_file.empty() || rq.bodies_file.empty() || rq.ranks.empty())
-    throw InputError("(command line)", "", "tessera balance CASE.yaml --bodies CHECKPOINT.h5 --ranks 4,16,64");
+  if (rq.case_file.empty() || rq.ranks.empty())
+    throw InputError("(command line)", "", "tessera balance CASE.yaml [--bodies CHECKPOINT.h5] --ranks 4,16,64");
   const Config config = Config::load(rq.case_file, rq.sets);
   const ConfigNode root = config.root();
+  if (root.has("scene") && root.text("scene") == "blast") return blast_balance_report(rq, root);
+  if (rq.bodies_file.empty())
+    throw InputError("--bodies", "", "a DEM checkpoint whose bodies to spread (tessera balance CASE.yaml --bodies "
+                     "CHECKPOINT.h5 --ranks 4,16,64)");
   const ConfigNode domain = root.section("domain");
   const Vec3 lo = domain.vec3("box_min", Dim::length), hi = domain.vec3("box_max", Dim::length);
   std::array<int, 3> requested{0, 0, 0};

@@ -6,6 +6,9 @@
 // domain.process_grid and plane mode); slabs are kept at least the contact reach wide (2 r_max plus
 // the skin) and, in flow scenes, on the fluid's cell faces. The work is one per body: the DEM's
 // cost is nearly proportional to the bodies in a dense bed.
+// A blast case (`scene: blast`, no --bodies) reports its elements instead: the work of a macro step
+// per rank at the initial time-step levels with equal slabs, balanced cuts and a METIS partition of
+// the element graph, and the bonds each cuts (src/fracture/element_partition.hpp).
 #pragma once
 #include <string>
 #include <vector>

@@ -3,7 +3,7 @@
 //
 //   tessera run CASE.yaml [--set section.key=value ...] [--output DIR] [--restart CHECKPOINT] [--quiet]
 //               [--petsc "-poisson_pc_type gamg ..."]
-//   tessera balance CASE.yaml --bodies CHECKPOINT.h5 --ranks 4,16,64 [--set ...] [--json FILE]
+//   tessera balance CASE.yaml [--bodies CHECKPOINT.h5] --ranks 4,16,64 [--set ...] [--json FILE]
 //   tessera info
 // Exit codes: 0 done, 2 bad input (nothing written), 3 interrupted by a signal (checkpoint written),
 // 4 blow-up (failure.h5 written), 1 other failure (MPI_Abort).
@@ -41,8 +41,9 @@ namespace {
 const char* kUsage =
     "usage: tessera run CASE.yaml [--set section.key=value ...] [--output DIR] [--restart CHECKPOINT] [--quiet]\n"
     "                   [--petsc \"PETSc options\"]   (flow scenes: e.g. -poisson_ksp_monitor -poisson_pc_type gamg)\n"
-    "       tessera balance CASE.yaml --bodies CHECKPOINT.h5 --ranks 4,16,64 [--set ...] [--json FILE]\n"
-    "                   (imbalance of the checkpoint's bodies on P ranks: equal slabs and balanced cuts)\n"
+    "       tessera balance CASE.yaml [--bodies CHECKPOINT.h5] --ranks 4,16,64 [--set ...] [--json FILE]\n"
+    "                   (imbalance of the checkpoint's bodies on P ranks: equal slabs and balanced cuts;\n"
+    "                    a blast case: its elements' work with slabs, balanced cuts and METIS)\n"
     "       tessera info\n";
 
 struct Args {

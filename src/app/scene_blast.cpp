@@ -2,7 +2,7 @@
 // The blast scene (issue 17; docs/theory.md B1-B10): a block meshed into tetrahedra (Gmsh), bonded
 // on every shared face, fractured by the gas pressure in a borehole. Case keys: section `blast`
 // (mesh, density, bond, contact, borehole, stepping, time_step, stability_factor, travel_limit,
-// max_level, damping, probe_time, process_grid), `run`, `output`. Output:
+// max_level, damping, probe_time, process_grid, partition), `run`, `output`. Output:
 // DIR/elements_NNNNNN.h5 + DIR/elements.xmf (each element's tetrahedron at its pose, with
 // displacement, velocity, damage, broken faces and time-step level per cell), DIR/cracks.xmf (the
 // released faces), checkpoints, summary.json.
@@ -13,9 +13,12 @@
 #include <filesystem>
 #include <iomanip>
 #include <sstream>
+#include <tuple>
 
+#include "app/blast_case.hpp"
 #include "app/run_loop.hpp"
 #include "app/scenes.hpp"
+#include "core/balance.hpp"
 #include "core/errors.hpp"
 #include "core/h5_file.hpp"
 #include "core/text_file.hpp"
@@ -54,6 +57,7 @@ FractureSettings read_fracture_settings(const ConfigNode& blast) {
   s.stepping = stepping == "travel" ? Stepping::travel : (stepping == "stability" ? Stepping::stability : Stepping::uniform);
   s.travel_limit = blast.real("travel_limit", Dim::length, Range::positive(), s.travel_limit);
   s.max_level = static_cast<int>(blast.integer("max_level", 0, 40, s.max_level));
+  s.partition = partition_from_name(blast.choice("partition", {"slabs", "balanced", "metis"}, "metis"));
   return s;
 }
 
@@ -81,24 +85,35 @@ std::pair<Vec3, Vec3> bounding_box(const TetMesh& m) {
   return {lo - pad, hi + pad};
 }
 
+}  // namespace
+
+BlastCase read_blast_case(const ConfigNode& root, const std::string& case_dir) {
+  BlastCase c;
+  const ConfigNode blast = root.section("blast");
+  const fs::path mesh_path(blast.text("mesh"));
+  c.mesh_file = mesh_path.is_absolute() ? mesh_path.string() : (fs::path(case_dir) / mesh_path).lexically_normal().string();
+  c.mesh = read_gmsh(c.mesh_file);
+  c.settings = read_fracture_settings(blast);
+  c.hole = read_borehole(blast);
+  if (blast.has("process_grid")) {
+    const auto g = blast.integers("process_grid", 3, 0, 1 << 20);
+    c.grid = {int(g[0]), int(g[1]), int(g[2])};
+  }
+  std::tie(c.lo, c.hi) = bounding_box(c.mesh);
+  return c;
+}
+
+namespace {
+
 class BlastScene final : public SteppedScene {
  public:
   BlastScene(const ConfigNode& root, MPI_Comm comm, const std::string& case_dir) {
-    const ConfigNode blast = root.section("blast");
-    const fs::path mesh_path(blast.text("mesh"));
-    mesh_file_ = mesh_path.is_absolute() ? mesh_path.string() : (fs::path(case_dir) / mesh_path).lexically_normal().string();
-    const TetMesh mesh = read_gmsh(mesh_file_);
-    const FractureSettings settings = read_fracture_settings(blast);
-    const auto hole = read_borehole(blast);
-    probe_time_ = blast.real("probe_time", Dim::time, Range::positive(), 5e-4);
-    std::array<int, 3> grid{0, 0, 0};
-    if (blast.has("process_grid")) {
-      const auto g = blast.integers("process_grid", 3, 0, 1 << 20);
-      grid = {int(g[0]), int(g[1]), int(g[2])};
-    }
-    const auto [lo, hi] = bounding_box(mesh);
-    decomp_ = std::make_unique<Decomposition>(comm, lo, hi, grid);
-    solver_ = std::make_unique<FractureSolver>(*decomp_, build_bonded_block(mesh, settings.density), settings, hole);
+    BlastCase c = read_blast_case(root, case_dir);
+    mesh_file_ = c.mesh_file;
+    probe_time_ = root.section("blast").real("probe_time", Dim::time, Range::positive(), 5e-4);
+    decomp_ = std::make_unique<Decomposition>(comm, c.lo, c.hi, c.grid);
+    solver_ = std::make_unique<FractureSolver>(*decomp_, build_bonded_block(c.mesh, c.settings.density), c.settings, c.hole);
+    const auto& hole = c.hole;
     read_loop_keys(root, true);
     // The probe: the element whose initial centroid is nearest the hole's axis (lowest index on a tie).
     if (hole) {
@@ -423,6 +438,9 @@ void BlastScene::summarise(nlohmann::json& s) {
   for (std::size_t k = 0; k < b.bonds.size(); ++k)
     if (solver_->broken()[k]) crack_area += b.bonds[k].area;
   long counts[3] = {solver_->element_steps(), solver_->bond_evaluations(), solver_->contact_evaluations()};
+  // Every rank's counters (the measured work per rank, issue 19), then their sums.
+  std::vector<long> each(3 * static_cast<std::size_t>(decomp_->size()));
+  MPI_Allgather(counts, 3, MPI_LONG, each.data(), 3, MPI_LONG, decomp_->comm());
   MPI_Allreduce(MPI_IN_PLACE, counts, 3, MPI_LONG, MPI_SUM, decomp_->comm());
   // Per-rank time in contact work (bonds and sphere contacts), every rank's.
   const double mine = solver_->timers().total("bond_forces") + solver_->timers().total("contact_forces");
@@ -462,6 +480,26 @@ void BlastScene::summarise(nlohmann::json& s) {
   s["contact_spheres"] = solver_->sphere_count();
   s["contact_list_builds"] = solver_->list_builds();
   s["contact_seconds_per_rank"] = contact_time;
+  // The partition (issue 19): the planned work per rank at the start and its imbalance, the bonds cut.
+  const std::vector<double> planned = solver_->planned_work();
+  nlohmann::json measured;
+  const char* names[3] = {"element_steps", "bond_evaluations", "contact_evaluations"};
+  for (std::size_t k = 0; k < 3; ++k) {
+    std::vector<long> v;
+    for (int r = 0; r < decomp_->size(); ++r) v.push_back(each[3 * static_cast<std::size_t>(r) + k]);
+    measured[names[k]] = v;
+  }
+  // The measured work in the partition's units: updates plus bond evaluations at their cost.
+  std::vector<double> measured_work;
+  for (int r = 0; r < decomp_->size(); ++r)
+    measured_work.push_back(static_cast<double>(each[3 * static_cast<std::size_t>(r)]) +
+                            kBondCostPerUpdate * static_cast<double>(each[3 * static_cast<std::size_t>(r) + 1]));
+  s["partition"] = {{"method", partition_name(solver_->settings().partition)},
+                    {"measured_per_rank", measured},
+                    {"measured_imbalance", imbalance(measured_work)},
+                    {"planned_work_per_rank", planned},
+                    {"planned_imbalance", imbalance(planned)},
+                    {"cut_bonds", solver_->cut_bond_count()}};
   s["output"] = {{"checkpoint", "checkpoint.h5"},
                  {"snapshots", snapshots_.empty() ? "" : "elements.xmf, cracks.xmf"}};
 }

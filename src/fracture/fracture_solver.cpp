@@ -40,11 +40,22 @@ FractureSolver::FractureSolver(const Decomposition& decomp, BondedBlock block, F
                          std::to_string(std::sqrt(2 * settings_.bond.fracture_energy * settings_.bond.kn) / 1e6) +
                          " MPa, so that the softening branch exists (docs/theory.md B4)");
   const std::size_t n = block_.size();
+  choose_steps();
+  // Owners (element_partition.hpp), from the work of the levels just chosen.
+  work_ = element_work(block_, settings_.stepping == Stepping::stability ? stable_level_ : std::vector<int>(n, 0));
+  const std::vector<int> part = partition_elements(block_, work_, settings_.partition, decomp_.global_lo(),
+                                                   decomp_.global_hi(), decomp_.dims());
   owner_.resize(n);
   owned_by_rank_.assign(static_cast<std::size_t>(decomp_.size()), {});
   for (std::size_t e = 0; e < n; ++e) {
-    owner_[e] = decomp_.owner_rank(block_.x0[e]);
-    owned_by_rank_[static_cast<std::size_t>(owner_[e])].push_back(static_cast<int>(e));
+    int r = part[e];
+    if (settings_.partition != Partition::metis) {  // a grid cell, x fastest: its rank in the Cartesian grid
+      const auto& d = decomp_.dims();
+      int c[3] = {r % d[0], (r / d[0]) % d[1], r / (d[0] * d[1])};
+      MPI_Cart_rank(decomp_.comm(), c, &r);
+    }
+    owner_[e] = r;
+    owned_by_rank_[static_cast<std::size_t>(r)].push_back(static_cast<int>(e));
   }
   x_ = block_.x0, q_ = block_.q0;
   v_.assign(n, {}), w_.assign(n, {}), L_.assign(n, {}), F_.assign(n, {}), T_.assign(n, {});
@@ -114,7 +125,7 @@ double FractureSolver::stable_dt() const {
   return settings_.stability_factor * t;
 }
 
-void FractureSolver::setup(bool fresh) {
+void FractureSolver::choose_steps() {
   const std::size_t n = block_.size();
   dt_ = settings_.time_step ? *settings_.time_step : stable_dt();
   if (settings_.stepping == Stepping::stability) {
@@ -130,6 +141,10 @@ void FractureSolver::setup(bool fresh) {
       stable_level_[e] = k;
     }
   }
+}
+
+void FractureSolver::setup(bool fresh) {
+  const std::size_t n = block_.size();
   level_.assign(n, 0);
   t_el_.assign(n, time_);
   S_.assign(n, {}), A_.assign(n, {});

@@ -12,9 +12,8 @@
 //   kick            v += dt/2 F/m, L += dt/2 T
 //   broken          faces released this step are made known to every rank
 //
-// Parallel (the seed's own scheme, section 3.2, on a spatial partition): every rank holds every
-// element's state; an element belongs to the rank whose sub-box of the process grid holds its
-// initial centroid, which integrates it. A bond or a contact is evaluated by each rank owning one of
+// Parallel (the seed's own scheme, section 3.2): every rank holds every element's state; an element
+// belongs to one rank (settings.partition: element_partition.hpp), which integrates it. A bond or a contact is evaluated by each rank owning one of
 // its two elements (a pair across ranks twice, with the same inputs and so the same bits), and an
 // element sums its forces in bond order, then contact order, then the hole: the results do not
 // depend on the rank count. The states travel by one all-gather per step (13 values per element):
@@ -30,6 +29,7 @@
 #include "core/timers.hpp"
 #include "fracture/bond_law.hpp"
 #include "fracture/bonded_block.hpp"
+#include "fracture/element_partition.hpp"
 #include "fracture/face_spheres.hpp"
 
 namespace tessera {
@@ -60,6 +60,7 @@ struct FractureSettings {
   double travel_limit = 1e-8;        // l: |v| dt <= l (travel levels)
   int max_level = 30;
   bool damping = true;               // false: no dashpots (energy tests)
+  Partition partition = Partition::slabs;  // which rank owns each element (element_partition.hpp)
 };
 
 // A pair's force: on the second element (the slave; contact: sphere a's element) `force`, on the
@@ -115,6 +116,11 @@ class FractureSolver {
   const std::vector<Vec3>& w() const { return w_; }
   const std::vector<Quaternion>& q() const { return q_; }
   const std::vector<int>& owner() const { return owner_; }
+  // The work a macro step gives each rank at the start (element_partition.hpp: updates and bond
+  // evaluations at the initial levels, a cut bond on both of its ranks), and the bonds cut.
+  std::vector<double> planned_work() const { return part_work(block_, work_, owner_, decomp_.size()); }
+  long cut_bond_count() const { return cut_bonds(block_, owner_); }
+  const ElementWork& work() const { return work_; }
   bool owns(std::size_t e) const { return owner_[e] == decomp_.rank(); }
   // Collective: every rank takes the owners' full state of elements and bonds (before output).
   void sync_state();
@@ -164,6 +170,7 @@ class FractureSolver {
   void exchange();
   void exchange_elements(const std::vector<std::vector<int>>& lists);  // x, q, v, w, clock of each list's rank
   double element_limit(std::size_t e) const;
+  void choose_steps();  // dt_ and, with stability levels, each element's level (B9, B10)
   Pose pose_at(std::size_t e, double t) const;  // on its piecewise-linear path (B10)
   void assign_levels();
   void advance_to(std::size_t e, double t);  // drift (x, q) from its clock to t
@@ -207,6 +214,7 @@ class FractureSolver {
   std::optional<Borehole> hole_;
   std::vector<int> hole_faces_;
   std::vector<int> owner_;
+  ElementWork work_;
   std::vector<std::vector<int>> element_bonds_;  // bonds of each element
   std::vector<std::vector<int>> owned_by_rank_;
   std::vector<Vec3> x_, v_, w_, L_, F_, T_;
