@@ -338,6 +338,7 @@ void FractureSolver::restore(const std::vector<Vec3>& x, const std::vector<Quate
     }
     sort_pairs();
   }
+  count_pairs();
   x_ = x, q_ = q, v_ = v, L_ = L;
 }
 

@@ -157,6 +157,7 @@ class FractureSolver {
     Quaternion q;
     std::array<Vec3, 3> R;
     Vec3 rot(const Vec3& a) const { return {dot(R[0], a), dot(R[1], a), dot(R[2], a)}; }
+    Vec3 unrot(const Vec3& a) const { return R[0] * a.x + R[1] * a.y + R[2] * a.z; }  // world -> body
   };
   static Pose make_pose(const Vec3& x, const Vec3& v, const Vec3& w, const Quaternion& q);
   struct Sphere {
@@ -204,6 +205,7 @@ class FractureSolver {
   void update_list(double ahead);  // rebuild when stale (ahead: what the coming step may move), else extend
   void consider_pair(int a, int b, const Vec3& pa, const Vec3& pb);
   void sort_pairs();
+  void count_pairs();  // collective: listed_pairs_ of every element
   long cell_key(const Vec3& p) const;
   Vec3 sphere_position(std::size_t s) const;
   double stable_dt() const;
@@ -224,6 +226,7 @@ class FractureSolver {
   std::vector<int> newly_broken_;  // this step, bonds whose master this rank owns
   std::vector<Sphere> spheres_;
   std::vector<std::pair<int, int>> pairs_;
+  std::vector<int> listed_pairs_;  // per element: its listed pairs (every rank alike; B7's split)
   std::vector<Vec3> build_x_;
   std::vector<Quaternion> build_q_;
   double max_radius_ = 0, skin_ = 0;

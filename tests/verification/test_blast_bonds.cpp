@@ -207,14 +207,14 @@ TEST(Multirate, ElementsOnDifferentLevelsCollideConservingMomentum) {
       return f.v()[0] * f.block().mass[0] + f.v()[1] * f.block().mass[1];
     };
     const Vec3 p0 = momentum();
-    int levels_apart = 0;
-    for (int i = 0; i < 40000 && f.v()[0].x == 0; ++i) f.step();
-    ASSERT_NE(f.v()[0].x, 0.0) << "they touched";
-    for (int i = 0; i < 2000; ++i) {
-      f.step();
-      levels_apart = std::max(levels_apart, std::abs(f.levels()[0] - f.levels()[1]));
-    }
-    EXPECT_GE(levels_apart, 1) << "different levels";
+    for (int i = 0; i < 40000 && f.v()[1].x == -2.0; ++i) f.step();
+    ASSERT_NE(f.v()[1].x, -2.0) << "they touched";
+    // The macro step of the first impulses: the small one still fast, on a finer level. (The contact
+    // dashpot, ~200 times critical, makes the impact plastic: afterwards both may share level 0.)
+    const int levels_apart = std::abs(f.levels()[0] - f.levels()[1]);
+    for (int i = 0; i < 2000; ++i) f.step();
+    EXPECT_GE(levels_apart, 1) << "different levels when they touched";
+    EXPECT_NE(f.v()[0].x, 0.0) << "the large one was pushed";
     EXPECT_LT(norm(momentum() - p0), 1e-13 * norm(p0));
     EXPECT_GT(f.v()[1].x, -2.0) << "the small one was slowed";
   }
