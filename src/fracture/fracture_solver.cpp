@@ -43,8 +43,14 @@ FractureSolver::FractureSolver(const Decomposition& decomp, BondedBlock block, F
   choose_steps();
   // Owners (element_partition.hpp), from the work of the levels just chosen.
   work_ = element_work(block_, settings_.stepping == Stepping::stability ? stable_level_ : std::vector<int>(n, 0));
-  const std::vector<int> part = partition_elements(block_, work_, settings_.partition, decomp_.global_lo(),
-                                                   decomp_.global_hi(), decomp_.dims());
+  // METIS's partition is made on rank 0 and sent: every rank must hold the same owners.
+  const bool metis = settings_.partition == Partition::metis;
+  if (static_cast<std::size_t>(decomp_.size()) > n)  // on every rank, before rank 0 alone partitions
+    throw InputError("ranks", std::to_string(decomp_.size()), "at most one rank per element (" + std::to_string(n) + ")");
+  std::vector<int> part(n, 0);
+  if (!metis || decomp_.rank() == 0)
+    part = partition_elements(block_, work_, settings_.partition, decomp_.global_lo(), decomp_.global_hi(), decomp_.dims());
+  if (metis && decomp_.size() > 1) MPI_Bcast(part.data(), static_cast<int>(n), MPI_INT, 0, decomp_.comm());
   owner_.resize(n);
   owned_by_rank_.assign(static_cast<std::size_t>(decomp_.size()), {});
   for (std::size_t e = 0; e < n; ++e) {
