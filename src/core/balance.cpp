@@ -71,19 +71,20 @@ CutPlanes equal_cuts(const Vec3& lo, const Vec3& hi, std::array<int, 3> dims) {
   return cuts;
 }
 
+int grid_cell(const Vec3& x, std::array<int, 3> dims, const CutPlanes& interior) {
+  int r = 0, stride = 1;
+  for (int d = 0; d < 3; ++d) {
+    const auto& c = interior[static_cast<std::size_t>(d)];
+    r += static_cast<int>(std::upper_bound(c.begin(), c.end(), x[d]) - c.begin()) * stride;
+    stride *= dims[static_cast<std::size_t>(d)];
+  }
+  return r;
+}
+
 std::vector<double> rank_work(const std::vector<WorkSample>& work, std::array<int, 3> dims,
                               const CutPlanes& interior) {
   std::vector<double> per_rank(static_cast<std::size_t>(dims[0]) * dims[1] * dims[2], 0.0);
-  for (const auto& s : work) {
-    std::size_t r = 0, stride = 1;
-    for (int d = 0; d < 3; ++d) {
-      const auto& c = interior[d];
-      const auto coord = static_cast<std::size_t>(std::upper_bound(c.begin(), c.end(), s.x[d]) - c.begin());
-      r += coord * stride;
-      stride *= static_cast<std::size_t>(dims[d]);
-    }
-    per_rank[r] += s.weight;
-  }
+  for (const auto& s : work) per_rank[static_cast<std::size_t>(grid_cell(s.x, dims, interior))] += s.weight;
   return per_rank;
 }
 

@@ -34,6 +34,8 @@ CutPlanes balanced_cuts(const std::vector<WorkSample>& work, const Vec3& lo, con
                         const Vec3& min_width = {}, const Vec3& spacing = {});
 CutPlanes equal_cuts(const Vec3& lo, const Vec3& hi, std::array<int, 3> dims);
 
+// The grid cell (x fastest) that holds x for interior cuts; outside the box, the boundary slab.
+int grid_cell(const Vec3& x, std::array<int, 3> dims, const CutPlanes& interior);
 // The work of each rank of the grid (rank order: x fastest) for interior cuts; a sample outside the
 // box goes to the boundary slab, as Decomposition::owner_coord does.
 std::vector<double> rank_work(const std::vector<WorkSample>& work, std::array<int, 3> dims,

@@ -39,15 +39,7 @@ namespace {
 
 std::vector<int> grid_parts(const BondedBlock& block, const CutPlanes& cuts, std::array<int, 3> dims) {
   std::vector<int> part(block.size());
-  for (std::size_t e = 0; e < block.size(); ++e) {
-    int r = 0, stride = 1;
-    for (int d = 0; d < 3; ++d) {
-      const auto& c = cuts[static_cast<std::size_t>(d)];
-      r += static_cast<int>(std::upper_bound(c.begin(), c.end(), block.x0[e][d]) - c.begin()) * stride;
-      stride *= dims[static_cast<std::size_t>(d)];
-    }
-    part[e] = r;
-  }
+  for (std::size_t e = 0; e < block.size(); ++e) part[e] = grid_cell(block.x0[e], dims, cuts);
   return part;
 }
 
@@ -76,7 +68,7 @@ std::vector<int> metis_parts(const BondedBlock& block, const ElementWork& work, 
   idx_t nv = static_cast<idx_t>(n), ncon = 1, np = parts, cut = 0;
   idx_t options[METIS_NOPTIONS];
   METIS_SetDefaultOptions(options);
-  options[METIS_OPTION_SEED] = 1;      // the same partition on every rank and every run
+  options[METIS_OPTION_SEED] = 1;      // the same partition in every run
   options[METIS_OPTION_UFACTOR] = 10;  // parts within 1 % of the mean weight
   std::vector<idx_t> part(n, 0);
   const int status = METIS_PartGraphKway(&nv, &ncon, xadj.data(), adjncy.data(), vwgt.data(), nullptr, adjwgt.data(),
