@@ -479,6 +479,7 @@ void BlastScene::summarise(nlohmann::json& s) {
   s["contact_evaluations"] = counts[2];
   s["contact_spheres"] = solver_->sphere_count();
   s["contact_list_builds"] = solver_->list_builds();
+  s["contact_list_refreshes"] = solver_->list_refreshes();
   s["contact_seconds_per_rank"] = contact_time;
   // The partition (issue 19): the planned work per rank at the start and its imbalance, the bonds cut.
   const std::vector<double> planned = solver_->planned_work();

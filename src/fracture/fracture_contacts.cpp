@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
 // Contact spheres and their list (docs/theory.md B6-B7): spheres on the block's surface and on
-// released faces, the Verlet list of sphere pairs of different, unbonded elements (full builds
-// when an element has moved more than skin/2 minus what the coming step may add; new spheres
-// added to the list as faces break), and the pair's force.
+// released faces, the Verlet list of sphere pairs of different, unbonded elements (an element that
+// has moved more than skin/2 minus what the coming step may add is searched again, a full build
+// when a quarter of them have; new spheres added to the list as faces break), and the pair's force.
 #include <algorithm>
 #include <cmath>
 
@@ -47,24 +47,84 @@ bool FractureSolver::bonded(int a, int b) const {
   return false;
 }
 
-bool FractureSolver::list_stale(double ahead) const {
-  if (build_x_.empty() || max_radius_ > 1.5 * cell_radius_) return true;  // never built; cells too small
-  const double limit = 0.5 * skin_ - ahead;
-  if (limit <= 0) return true;
-  // Per element: a point at distance r from its centroid moved at most |dx| + theta r since the
-  // build, theta the rotation angle between the two orientations.
-  for (std::size_t e = 0; e < block_.size(); ++e) {
+int FractureSolver::mark_stale(double horizon) {
+  // B6's list check, per element: a point at distance r from its centroid moved at most
+  // |dx| + theta r since the element was last searched (theta: the rotation between the two
+  // orientations); with what the coming step may add, it must stay within skin/2. What it may add:
+  // twice the fastest of its own speed and its listed partners' (a contact cannot throw it faster),
+  // over `horizon` (the macro step; 0 for the uniform step, checked every step).
+  const std::size_t n = block_.size();
+  moved_.assign(n, 0.0);
+  stale_.assign(n, 0);
+  for (std::size_t e = 0; e < n; ++e) {
     const Quaternion& a = q_[e];
     const Quaternion& b = build_q_[e];
     const double c = std::min(1.0, std::fabs(a.w * b.w + a.x * b.x + a.y * b.y + a.z * b.z));
-    if (norm(x_[e] - build_x_[e]) + 2 * std::acos(c) * reach_[e] > limit) return true;
+    moved_[e] = norm(x_[e] - build_x_[e]) + 2 * std::acos(c) * reach_[e];
   }
-  return false;
+  if (horizon > 0) {
+    // Each element's bound from its owner (which lists all its pairs), then every rank alike.
+    std::vector<double> speed(n);
+    for (std::size_t e = 0; e < n; ++e) speed[e] = norm(v_[e]) + norm(w_[e]) * reach_[e];
+    std::vector<double> fastest = speed;
+    for (const auto& [sa, sb] : pairs_) {
+      const std::size_t a = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(sa)].element);
+      const std::size_t b = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(sb)].element);
+      fastest[a] = std::max(fastest[a], speed[b]), fastest[b] = std::max(fastest[b], speed[a]);
+    }
+    const int rank = decomp_.rank();
+    for (std::size_t e = 0; e < n; ++e)
+      stale_[e] = owner_[e] == rank && moved_[e] + 2 * fastest[e] * horizon > 0.5 * skin_;
+    if (decomp_.size() > 1)
+      MPI_Allreduce(MPI_IN_PLACE, stale_.data(), static_cast<int>(n), MPI_CHAR, MPI_MAX, decomp_.comm());
+  } else {
+    for (std::size_t e = 0; e < n; ++e) stale_[e] = moved_[e] > 0.5 * skin_;
+  }
+  return static_cast<int>(std::count(stale_.begin(), stale_.end(), 1));
 }
 
-long FractureSolver::cell_key(const Vec3& p) const {
-  auto c = [&](double v) { return (static_cast<long>(std::floor(v / cell_size_)) + (1L << 20)) & 0x1FFFFF; };
-  return c(p.x) | (c(p.y) << 21) | (c(p.z) << 42);
+void FractureSolver::reset_cells() {
+  // At most ~8 cells per sphere (+ a floor): a coarse mesh's large spheres must not make a fine grid.
+  const double spheres = static_cast<double>(spheres_.size());
+  for (;;) {
+    double total = 1;
+    for (int d = 0; d < 3; ++d) {
+      cell_count_[static_cast<std::size_t>(d)] = std::max(1, static_cast<int>((box_hi_[d] - box_lo_[d]) / cell_size_) + 1);
+      total *= cell_count_[static_cast<std::size_t>(d)];
+    }
+    if (total <= 8 * spheres + 4096) break;
+    cell_size_ *= 1.25;  // larger cells stay correct (more candidates)
+  }
+  cell_head_.assign(static_cast<std::size_t>(cell_count_[0]) * cell_count_[1] * cell_count_[2], -1);
+  cell_next_.assign(spheres_.size(), -1);
+}
+
+int FractureSolver::cell_coord(double v, int d) const {
+  const double c = std::floor((v - box_lo_[d]) / cell_size_);
+  return static_cast<int>(std::clamp(c, 0.0, static_cast<double>(cell_count_[static_cast<std::size_t>(d)] - 1)));
+}
+
+void FractureSolver::insert_cell(int s, const Vec3& p) {
+  if (cell_next_.size() <= static_cast<std::size_t>(s)) cell_next_.resize(spheres_.size(), -1);
+  const std::size_t c = (static_cast<std::size_t>(cell_coord(p.z, 2)) * cell_count_[1] + cell_coord(p.y, 1)) * cell_count_[0] +
+                        cell_coord(p.x, 0);
+  cell_next_[static_cast<std::size_t>(s)] = cell_head_[c];
+  cell_head_[c] = s;
+}
+
+template <class F>
+void FractureSolver::for_near(const Vec3& p, int ring, F&& f) const {
+  int lo[3], hi[3];
+  for (int d = 0; d < 3; ++d) {
+    const int c = cell_coord(p[d], d);
+    lo[d] = std::max(0, c - ring), hi[d] = std::min(cell_count_[static_cast<std::size_t>(d)] - 1, c + ring);
+  }
+  for (int z = lo[2]; z <= hi[2]; ++z)
+    for (int y = lo[1]; y <= hi[1]; ++y)
+      for (int x = lo[0]; x <= hi[0]; ++x)
+        for (int s = cell_head_[(static_cast<std::size_t>(z) * cell_count_[1] + y) * cell_count_[0] + x]; s >= 0;
+             s = cell_next_[static_cast<std::size_t>(s)])
+          f(s);
 }
 
 Vec3 FractureSolver::sphere_position(std::size_t s) const {
@@ -72,13 +132,14 @@ Vec3 FractureSolver::sphere_position(std::size_t s) const {
   return x_[e] + q_[e].rotate(spheres_[s].centre);
 }
 
-void FractureSolver::consider_pair(int a, int b, const Vec3& pa, const Vec3& pb) {
+void FractureSolver::consider_pair(int a, int b, const Vec3& pa, const Vec3& pb, double margin) {
   const Sphere &sa = spheres_[static_cast<std::size_t>(a)], &sb = spheres_[static_cast<std::size_t>(b)];
-  if (sa.element == sb.element || bonded(sa.element, sb.element)) return;
+  // The cheap tests first: most candidates are out of reach.
+  const double reach = sa.radius + sb.radius + skin_ + margin;
+  if (norm2(pa - pb) >= reach * reach || sa.element == sb.element) return;
   const int rank = decomp_.rank();
   if (owner_[static_cast<std::size_t>(sa.element)] != rank && owner_[static_cast<std::size_t>(sb.element)] != rank) return;
-  const double reach = sa.radius + sb.radius + skin_;
-  if (norm2(pa - pb) >= reach * reach) return;
+  if (bonded(sa.element, sb.element)) return;
   pairs_.push_back(sa.key < sb.key ? std::pair{a, b} : std::pair{b, a});
 }
 
@@ -102,18 +163,14 @@ void FractureSolver::build_list() {
   for (std::size_t s = 0; s < n; ++s) at[s] = sphere_position(s);
   cell_radius_ = max_radius_;
   cell_size_ = 2 * max_radius_ + skin_;
-  cells_.clear();
-  for (std::size_t s = 0; s < n; ++s) cells_[cell_key(at[s])].push_back(static_cast<int>(s));
+  reset_cells();
+  for (std::size_t s = 0; s < n; ++s) insert_cell(static_cast<int>(s), at[s]);
   for (std::size_t a = 0; a < n; ++a) {
     const Vec3& p = at[a];
-    for (long dx = -1; dx <= 1; ++dx)
-      for (long dy = -1; dy <= 1; ++dy)
-        for (long dz = -1; dz <= 1; ++dz) {
-          const auto it = cells_.find(cell_key(p + Vec3{dx * cell_size_, dy * cell_size_, dz * cell_size_}));
-          if (it == cells_.end()) continue;
-          for (int b : it->second)
-            if (b > static_cast<int>(a)) consider_pair(static_cast<int>(a), b, p, at[static_cast<std::size_t>(b)]);
-        }
+    const int ia = static_cast<int>(a);
+    for_near(p, 1, [&](int b) {
+      if (b > ia) consider_pair(ia, b, p, at[static_cast<std::size_t>(b)]);
+    });
   }
   sort_pairs();
   count_pairs();
@@ -127,14 +184,8 @@ void FractureSolver::extend_list() {
   const std::size_t n = spheres_.size();
   for (std::size_t a = listed_spheres_; a < n; ++a) {
     const Vec3 p = sphere_position(a);
-    for (long dx = -2; dx <= 2; ++dx)
-      for (long dy = -2; dy <= 2; ++dy)
-        for (long dz = -2; dz <= 2; ++dz) {
-          const auto it = cells_.find(cell_key(p + Vec3{dx * cell_size_, dy * cell_size_, dz * cell_size_}));
-          if (it == cells_.end()) continue;
-          for (int b : it->second) consider_pair(static_cast<int>(a), b, p, sphere_position(static_cast<std::size_t>(b)));
-        }
-    cells_[cell_key(p)].push_back(static_cast<int>(a));
+    for_near(p, 2, [&](int b) { consider_pair(static_cast<int>(a), b, p, sphere_position(static_cast<std::size_t>(b))); });
+    insert_cell(static_cast<int>(a), p);
   }
   for (int bond : unlisted_bonds_) {
     const BondGeometry& g = block_.bonds[static_cast<std::size_t>(bond)];
@@ -167,12 +218,46 @@ void FractureSolver::count_pairs() {
                   decomp_.comm());
 }
 
-void FractureSolver::update_list(double ahead) {
-  if (list_stale(ahead)) {
-    build_list();
-  } else if (listed_spheres_ < spheres_.size()) {
-    extend_list();
+void FractureSolver::refresh_list() {
+  // The elements that moved too far (stale_) searched again where they are now; every other
+  // element keeps its pairs. A pair of a searched element A with an element X that has moved m_X
+  // since its own search is listed within reach + m_X: from now on A moves at most skin/2 and X at
+  // most skin/2 + m_X from here, so a pair not listed stays apart until one of them is stale.
+  ++list_refreshes_;
+  const std::size_t n = spheres_.size();
+  std::erase_if(pairs_, [&](const std::pair<int, int>& p) {
+    return stale_[static_cast<std::size_t>(spheres_[static_cast<std::size_t>(p.first)].element)] ||
+           stale_[static_cast<std::size_t>(spheres_[static_cast<std::size_t>(p.second)].element)];
+  });
+  std::vector<Vec3> at(n);
+  for (std::size_t s = 0; s < n; ++s) at[s] = sphere_position(s);
+  reset_cells();  // where every sphere is now (a searched element's spheres may be far from the last build)
+  for (std::size_t s = 0; s < n; ++s) insert_cell(static_cast<int>(s), at[s]);
+  for (std::size_t e = 0; e < block_.size(); ++e) {
+    if (!stale_[e]) continue;
+    build_x_[e] = x_[e], build_q_[e] = q_[e];
+    for (const int a : element_spheres_[e]) {
+      const Vec3& p = at[static_cast<std::size_t>(a)];
+      // Ring 2: reach + m_X <= 2 r_max + 1.5 skin, within two cells of 2 r_max + skin.
+      for_near(p, 2, [&](int b) {
+        const std::size_t eb = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(b)].element);
+        if (stale_[eb] && (eb < e || (eb == e && b <= a))) return;  // two searched elements: once
+        consider_pair(a, b, p, at[static_cast<std::size_t>(b)], stale_[eb] ? 0.0 : moved_[eb]);
+      });
+    }
   }
+  sort_pairs();
+  count_pairs();
+}
+
+void FractureSolver::update_list(double horizon) {
+  // Never built, spheres larger than the cells allow, or most elements stale: a full build.
+  if (build_x_.empty() || max_radius_ > 1.5 * cell_radius_) return build_list();
+  if (listed_spheres_ < spheres_.size()) extend_list();
+  const int stale = mark_stale(horizon);
+  if (stale == 0) return;
+  if (4 * static_cast<std::size_t>(stale) > block_.size()) return build_list();
+  refresh_list();
 }
 
 PairForce FractureSolver::contact_force(std::size_t pair, const Pose& pa, const Pose& pb, double h) {

@@ -100,12 +100,7 @@ void FractureSolver::multirate_step() {
   clear_buckets(bonds, K + 1), clear_buckets(contacts, K + 1);
   {
     auto t = timers_.scope("contact_forces");
-    if (!spheres_.empty()) {
-      double vmax = 0;
-      for (std::size_t e = 0; e < block_.size(); ++e)
-        vmax = std::max(vmax, norm(v_[e]) + norm(w_[e]) * block_.max_edge);
-      update_list(2 * vmax * dt_);
-    }
+    if (!spheres_.empty()) update_list(dt_);
     for (std::size_t b = 0; b < block_.bonds.size(); ++b) {
       const std::size_t i = static_cast<std::size_t>(block_.bonds[b].master), j = static_cast<std::size_t>(block_.bonds[b].slave);
       if (broken_[b] || (owner_[i] != rank && owner_[j] != rank)) continue;

@@ -73,6 +73,12 @@ FractureSolver::FractureSolver(const Decomposition& decomp, BondedBlock block, F
   reach_.assign(n, 0.0);
   for (std::size_t e = 0; e < n; ++e)
     for (const Vec3& p : block_.vertices[e]) reach_[e] = std::max(reach_[e], norm(p));
+  box_lo_ = {1e300, 1e300, 1e300}, box_hi_ = {-1e300, -1e300, -1e300};
+  for (std::size_t e = 0; e < n; ++e)
+    for (int d = 0; d < 3; ++d) {
+      box_lo_[d] = std::min(box_lo_[d], x_[e][d] - reach_[e]);
+      box_hi_[d] = std::max(box_hi_[d], x_[e][d] + reach_[e]);
+    }
   element_bonds_.assign(n, {});
   for (std::size_t b = 0; b < block_.bonds.size(); ++b)
     for (int e : {block_.bonds[b].master, block_.bonds[b].slave})
@@ -307,7 +313,7 @@ void FractureSolver::restore(const std::vector<Vec3>& x, const std::vector<Quate
                              const std::vector<Vec3>& F, const std::vector<Vec3>& T) {
   bond_state_ = bonds;
   F_ = F, T_ = T;
-  spheres_.clear(), pairs_.clear(), cells_.clear(), unlisted_bonds_.clear();
+  spheres_.clear(), pairs_.clear(), unlisted_bonds_.clear();
   element_spheres_.assign(block_.size(), {});
   max_radius_ = 0;
   add_surface_spheres();
@@ -330,10 +336,11 @@ void FractureSolver::restore(const std::vector<Vec3>& x, const std::vector<Quate
     x_ = list.x, q_ = list.q;
     cell_radius_ = list.cell_radius;
     cell_size_ = 2 * cell_radius_ + skin_;
+    reset_cells();
     std::unordered_map<long, int> by_key;
     for (std::size_t k = 0; k < spheres_.size(); ++k) {
       by_key[spheres_[k].key] = static_cast<int>(k);
-      if (k < listed_spheres_) cells_[cell_key(sphere_position(k))].push_back(static_cast<int>(k));
+      if (k < listed_spheres_) insert_cell(static_cast<int>(k), sphere_position(k));
     }
     const int rank = decomp_.rank();
     for (const auto& [ka, kb] : list.pairs) {

@@ -22,7 +22,6 @@
 #include <mpi.h>
 
 #include <optional>
-#include <unordered_map>
 #include <vector>
 
 #include "core/decomposition.hpp"
@@ -144,6 +143,7 @@ class FractureSolver {
   long bond_evaluations() const { return bond_evaluations_; }
   long element_steps() const { return element_steps_; }  // this rank
   long list_builds() const { return list_builds_; }
+  long list_refreshes() const { return list_refreshes_; }  // searches of the stale elements only
   std::size_t sphere_count() const { return spheres_.size(); }
   std::size_t pair_count() const { return pairs_.size(); }
   // Each element's force at the last evaluation (uniform stepping; current on its owner).
@@ -196,17 +196,25 @@ class FractureSolver {
   void share_broken();
   void add_spheres(int bond);
   void add_surface_spheres();
-  // True when a sphere may have come within reach of one not listed (moved > skin/2 - ahead).
-  bool list_stale(double ahead) const;
+  // Marks stale_ the elements whose spheres may come within reach of one not listed before
+  // `horizon` has passed (moved_: each element's travel since it was last searched); returns how many.
+  int mark_stale(double horizon);
   // Two elements still joined by an intact bond: their spheres do not touch (the bond carries it).
   bool bonded(int a, int b) const;
   void build_list();
   void extend_list();               // the spheres and unbonded pairs of faces released since
-  void update_list(double ahead);  // rebuild when stale (ahead: what the coming step may move), else extend
-  void consider_pair(int a, int b, const Vec3& pa, const Vec3& pb);
+  void refresh_list();              // the stale elements' pairs searched again
+  void update_list(double horizon);  // extend, refresh or rebuild, valid for the coming `horizon`
+  void consider_pair(int a, int b, const Vec3& pa, const Vec3& pb, double margin = 0);
   void sort_pairs();
   void count_pairs();  // collective: listed_pairs_ of every element
-  long cell_key(const Vec3& p) const;
+  // The list's linked cells over the block's box at rest (a sphere outside it is kept in the nearest
+  // cell: two spheres within a cell of each other stay within a cell of each other).
+  void reset_cells();  // empty cells of size cell_size_
+  int cell_coord(double v, int d) const;
+  void insert_cell(int s, const Vec3& p);
+  template <class F>
+  void for_near(const Vec3& p, int ring, F&& f) const;  // f(s) for every sphere within `ring` cells
   Vec3 sphere_position(std::size_t s) const;
   double stable_dt() const;
 
@@ -231,10 +239,14 @@ class FractureSolver {
   std::vector<Quaternion> build_q_;
   double max_radius_ = 0, skin_ = 0;
   std::vector<double> reach_;  // each element's farthest vertex from its centroid
+  std::vector<double> moved_;  // each element's travel since its spheres were last searched
+  std::vector<char> stale_;
   std::vector<std::vector<int>> element_spheres_;
   std::vector<int> unlisted_bonds_;  // released since the list was last made
   std::size_t listed_spheres_ = 0;
-  std::unordered_map<long, std::vector<int>> cells_;
+  Vec3 box_lo_{}, box_hi_{};  // the block at rest, with its elements' reach
+  std::array<int, 3> cell_count_{1, 1, 1};
+  std::vector<int> cell_head_, cell_next_;  // first sphere of each cell; the next one in its cell
   double cell_size_ = 1, cell_radius_ = 0;
   double dt_ = 0, time_ = 0, min_dt_ = 1e300, min_dt_time_ = 0;
   std::vector<int> level_, stable_level_, kick_level_;
@@ -246,7 +258,8 @@ class FractureSolver {
   long epoch_ = 0;
   std::vector<double> t_el_;      // each element's clock (its x, q are of that time)
   std::vector<Vec3> S_, A_;       // impulse and angular impulse since its last update
-  long steps_ = 0, contact_evaluations_ = 0, bond_evaluations_ = 0, element_steps_ = 0, list_builds_ = 0;
+  long steps_ = 0, contact_evaluations_ = 0, bond_evaluations_ = 0, element_steps_ = 0, list_builds_ = 0,
+       list_refreshes_ = 0;
   PhaseTimers timers_;
 };
 
