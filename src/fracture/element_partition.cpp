@@ -25,13 +25,18 @@ const char* partition_name(Partition p) {
 
 ElementWork element_work(const BondedBlock& block, const std::vector<int>& level) {
   ElementWork w;
+  w.level = level;
+  w.bond.resize(block.bonds.size());
+  w.bond_level.resize(block.bonds.size());
+  for (std::size_t b = 0; b < block.bonds.size(); ++b) {
+    const auto i = static_cast<std::size_t>(block.bonds[b].master), j = static_cast<std::size_t>(block.bonds[b].slave);
+    const int k = std::max(level[i], level[j]);
+    w.bond_level[b] = k;
+    w.bond[b] = kBondCostPerUpdate * std::ldexp(1.0, k);
+    w.level[i] = std::max(w.level[i], k), w.level[j] = std::max(w.level[j], k);  // kicked at its finest bond's level
+  }
   w.element.resize(block.size());
   for (std::size_t e = 0; e < block.size(); ++e) w.element[e] = std::ldexp(1.0, level[e]);
-  w.bond.resize(block.bonds.size());
-  for (std::size_t b = 0; b < block.bonds.size(); ++b) {
-    const int k = std::max(level[static_cast<std::size_t>(block.bonds[b].master)], level[static_cast<std::size_t>(block.bonds[b].slave)]);
-    w.bond[b] = kBondCostPerUpdate * std::ldexp(1.0, k);
-  }
   return w;
 }
 
@@ -60,12 +65,28 @@ std::vector<int> metis_parts(const BondedBlock& block, const ElementWork& work, 
     adjncy[static_cast<std::size_t>(fill[j])] = static_cast<idx_t>(i), adjwgt[static_cast<std::size_t>(fill[j]++)] = wb;
   }
   // A vertex carries its updates and half of each of its bonds (the other half is its partner's).
+  // With levels, one constraint per level f: its work at a sub-step where the levels >= f are due
+  // (an update, and half an evaluation of each bond as fine as f).
+  int levels = 1;
+  for (std::size_t e = 0; e < n; ++e) levels = std::max(levels, work.level[e] + 1);
+  const auto nc = static_cast<std::size_t>(levels);
+  std::vector<double> w(n * nc, 0.0);
   for (std::size_t e = 0; e < n; ++e) {
-    double w = work.element[e];
-    for (idx_t k = xadj[e]; k < xadj[e + 1]; ++k) w += 0.05 * static_cast<double>(adjwgt[static_cast<std::size_t>(k)]);
-    vwgt[e] = static_cast<idx_t>(std::lround(10 * w));
+    if (nc == 1) w[e] = work.element[e];
+    for (std::size_t f = 0; nc > 1 && f <= static_cast<std::size_t>(work.level[e]); ++f) w[e * nc + f] += 1.0;
   }
-  idx_t nv = static_cast<idx_t>(n), ncon = 1, np = parts, cut = 0;
+  for (std::size_t b = 0; b < block.bonds.size(); ++b) {
+    const auto i = static_cast<std::size_t>(block.bonds[b].master), j = static_cast<std::size_t>(block.bonds[b].slave);
+    if (nc == 1) {
+      const double half = 0.05 * static_cast<double>(std::lround(10 * work.bond[b]));
+      w[i] += half, w[j] += half;
+    }
+    for (std::size_t f = 0; nc > 1 && f <= static_cast<std::size_t>(work.bond_level[b]); ++f)
+      w[i * nc + f] += 0.5 * kBondCostPerUpdate, w[j * nc + f] += 0.5 * kBondCostPerUpdate;
+  }
+  vwgt.resize(n * nc);
+  for (std::size_t k = 0; k < n * nc; ++k) vwgt[k] = static_cast<idx_t>(std::lround(10 * w[k]));
+  idx_t nv = static_cast<idx_t>(n), ncon = static_cast<idx_t>(nc), np = parts, cut = 0;
   idx_t options[METIS_NOPTIONS];
   METIS_SetDefaultOptions(options);
   options[METIS_OPTION_SEED] = 1;      // the same partition in every run

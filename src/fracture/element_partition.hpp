@@ -5,6 +5,9 @@
 //   metis     a METIS k-way partition of the element graph (elements joined by their bonds), the
 //             vertices weighted by their updates and the edges by their bond's evaluations: a bond
 //             whose elements are on two ranks is evaluated on both, so its cut is work as well.
+//             With levels, one balance constraint per level f: the work of the sub-steps at which
+//             the levels f and finer are due (each sub-step ends in an exchange that waits for every
+//             rank, so each kind of sub-step is balanced, not only the macro step's sum).
 // The work is what a macro step of B10 does: element e is updated 2^k_e times, a bond evaluated
 // 2^max(k_i, k_j) times (one level for the uniform step). The owners change no result: an element
 // is integrated by its owner, which sums its forces in bond, contact, hole order (fracture_solver.hpp).
@@ -29,6 +32,8 @@ constexpr double kBondCostPerUpdate = 1.4;
 struct ElementWork {
   std::vector<double> element;  // per element: updates per macro step
   std::vector<double> bond;     // per bond: evaluations per macro step times kBondCostPerUpdate
+  std::vector<int> level;       // per element: the level it is updated at (its own or a bond's finer one)
+  std::vector<int> bond_level;  // per bond: the finer of its two elements' levels
 };
 ElementWork element_work(const BondedBlock& block, const std::vector<int>& level);
 
