@@ -7,7 +7,9 @@
 //             whose elements are on two ranks is evaluated on both, so its cut is work as well.
 //             With levels, one balance constraint per level f: the work of the sub-steps at which
 //             the levels f and finer are due (each sub-step ends in an exchange that waits for every
-//             rank, so each kind of sub-step is balanced, not only the macro step's sum).
+//             rank, so each kind of sub-step is balanced, not only the macro step's sum), unless
+//             that leaves the sum more than 5 % above the mean (too few elements per rank): then
+//             the sum alone.
 // The work is what a macro step of B10 does: element e is updated 2^k_e times, a bond evaluated
 // 2^max(k_i, k_j) times (one level for the uniform step). The owners change no result: an element
 // is integrated by its owner, which sums its forces in bond, contact, hole order (fracture_solver.hpp).
