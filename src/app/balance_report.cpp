@@ -32,8 +32,12 @@ int blast_balance_report(const BalanceRequest& rq, const ConfigNode& root) {
               block.size(), block.bonds.size(), [&] { double w = 0; for (double x : solver.work().element) w += x; return w; }(),
               [&] { double w = 0; for (double x : solver.work().bond) w += x; return w / kBondCostPerUpdate; }(),
               kBondCostPerUpdate);
-  std::printf("%6s %10s %12s %12s %12s %12s %12s %12s\n", "ranks", "grid", "slabs", "(cut bonds)", "balanced",
-              "(cut bonds)", "metis", "(cut bonds)");
+  // Per partition: the macro step's imbalance (sum), the sub-steps' (every sub-step ends in an
+  // exchange that waits for the busiest rank: substep_imbalance, element_partition.hpp), bonds cut.
+  std::printf("%6s %10s %24s %24s %24s\n", "ranks", "grid", "slabs", "balanced", "metis");
+  std::printf("%6s %10s", "", "");
+  for (int k = 0; k < 3; ++k) std::printf(" %7s %7s %8s", "sum", "substep", "cut");
+  std::printf("\n");
   nlohmann::json table = nlohmann::json::array();
   for (const int p : rq.ranks) {
     const auto dims = Decomposition::choose_dims(p, c.hi - c.lo, c.grid);
@@ -42,9 +46,15 @@ int blast_balance_report(const BalanceRequest& rq, const ConfigNode& root) {
     for (const Partition how : {Partition::slabs, Partition::balanced, Partition::metis}) {
       const std::vector<int> part = partition_elements(block, solver.work(), how, c.lo, c.hi, dims);
       const std::vector<double> work = part_work(block, solver.work(), part, p);
+      const auto level_work = part_level_work(block, solver.work(), part, p);
+      const double substeps = substep_imbalance(level_work);
       const long cut = cut_bonds(block, part);
-      std::printf(" %12.3f %12ld", imbalance(work), cut);
-      row[partition_name(how)] = {{"imbalance", imbalance(work)}, {"cut_bonds", cut}, {"work_per_rank", work}};
+      std::printf(" %7.3f %7.3f %8ld", imbalance(work), substeps, cut);
+      row[partition_name(how)] = {{"imbalance", imbalance(work)},
+                                  {"substep_imbalance", substeps},
+                                  {"level_imbalance", level_imbalance(level_work)},
+                                  {"cut_bonds", cut},
+                                  {"work_per_rank", work}};
     }
     std::printf("\n");
     table.push_back(row);

@@ -17,10 +17,12 @@ void SteppedScene::read_loop_keys(const ConfigNode& root, bool end_time_required
     snapshot_interval_ = out->real("snapshot_interval", Dim::time, Range::non_negative(), 0.0);
     checkpoint_interval_ = out->real("checkpoint_interval", Dim::time, Range::non_negative(), 0.0);
     progress_interval_ = out->real("progress_interval", Dim::time, Range::positive(), 10.0);
+    land_on_times_ = out->flag("land_on_times", true);
   }
 }
 
 std::vector<double> SteppedScene::landing_targets() const {
+  if (!land_on_times_) return {end_time_.value_or(1e300)};
   return {end_time_.value_or(1e300), snapshots_.next(), checkpoints_.next()};
 }
 

@@ -500,6 +500,8 @@ void BlastScene::summarise(nlohmann::json& s) {
                     {"measured_imbalance", imbalance(measured_work)},
                     {"planned_work_per_rank", planned},
                     {"planned_imbalance", imbalance(planned)},
+                    {"planned_substep_imbalance", substep_imbalance(solver_->planned_level_work())},
+                    {"planned_level_imbalance", level_imbalance(solver_->planned_level_work())},
                     {"cut_bonds", solver_->cut_bond_count()}};
   s["output"] = {{"checkpoint", "checkpoint.h5"},
                  {"snapshots", snapshots_.empty() ? "" : "elements.xmf, cracks.xmf"}};

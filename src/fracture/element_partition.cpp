@@ -49,6 +49,43 @@ std::vector<int> grid_parts(const BondedBlock& block, const CutPlanes& cuts, std
   return part;
 }
 
+// METIS's vertex weights, `constraints` per element (element-major). A vertex carries its updates
+// and half of each of its bonds (the other half is its partner's).
+struct VertexWeights {
+  std::size_t constraints = 1;
+  std::vector<double> weight;
+};
+
+// The macro step's sum: one constraint (bond halves rounded as the edge weights are, to tenths).
+VertexWeights sum_weights(const BondedBlock& block, const ElementWork& work) {
+  VertexWeights w{1, work.element};
+  for (std::size_t b = 0; b < block.bonds.size(); ++b) {
+    const double half = 0.05 * static_cast<double>(std::lround(10 * work.bond[b]));
+    w.weight[static_cast<std::size_t>(block.bonds[b].master)] += half;
+    w.weight[static_cast<std::size_t>(block.bonds[b].slave)] += half;
+  }
+  return w;
+}
+
+// One constraint per level f: the vertex's work at a sub-step where the levels >= f are due (an
+// update, and half an evaluation of each bond as fine as f). part_level_work sums the same.
+VertexWeights level_weights(const BondedBlock& block, const ElementWork& work) {
+  const std::size_t n = block.size(), nc = static_cast<std::size_t>(work_levels(work));
+  VertexWeights w{nc, std::vector<double>(n * nc, 0.0)};
+  for (std::size_t e = 0; e < n; ++e)
+    for (std::size_t f = 0; f <= static_cast<std::size_t>(work.level[e]); ++f) w.weight[e * nc + f] += 1.0;
+  for (std::size_t b = 0; b < block.bonds.size(); ++b) {
+    const auto i = static_cast<std::size_t>(block.bonds[b].master), j = static_cast<std::size_t>(block.bonds[b].slave);
+    for (std::size_t f = 0; f <= static_cast<std::size_t>(work.bond_level[b]); ++f)
+      w.weight[i * nc + f] += 0.5 * kBondCostPerUpdate, w.weight[j * nc + f] += 0.5 * kBondCostPerUpdate;
+  }
+  return w;
+}
+
+VertexWeights vertex_weights(const BondedBlock& block, const ElementWork& work, bool per_level) {
+  return per_level && work_levels(work) > 1 ? level_weights(block, work) : sum_weights(block, work);
+}
+
 std::vector<int> metis_parts(const BondedBlock& block, const ElementWork& work, int parts, bool per_level) {
   const std::size_t n = block.size();
   if (parts == 1) return std::vector<int>(n, 0);
@@ -65,28 +102,10 @@ std::vector<int> metis_parts(const BondedBlock& block, const ElementWork& work, 
     adjncy[static_cast<std::size_t>(fill[i])] = static_cast<idx_t>(j), adjwgt[static_cast<std::size_t>(fill[i]++)] = wb;
     adjncy[static_cast<std::size_t>(fill[j])] = static_cast<idx_t>(i), adjwgt[static_cast<std::size_t>(fill[j]++)] = wb;
   }
-  // A vertex carries its updates and half of each of its bonds (the other half is its partner's).
-  // With levels, one constraint per level f: its work at a sub-step where the levels >= f are due
-  // (an update, and half an evaluation of each bond as fine as f).
-  int levels = 1;
-  for (std::size_t e = 0; per_level && e < n; ++e) levels = std::max(levels, work.level[e] + 1);
-  const auto nc = static_cast<std::size_t>(levels);
-  std::vector<double> w(n * nc, 0.0);
-  for (std::size_t e = 0; e < n; ++e) {
-    if (nc == 1) w[e] = work.element[e];
-    for (std::size_t f = 0; nc > 1 && f <= static_cast<std::size_t>(work.level[e]); ++f) w[e * nc + f] += 1.0;
-  }
-  for (std::size_t b = 0; b < block.bonds.size(); ++b) {
-    const auto i = static_cast<std::size_t>(block.bonds[b].master), j = static_cast<std::size_t>(block.bonds[b].slave);
-    if (nc == 1) {
-      const double half = 0.05 * static_cast<double>(std::lround(10 * work.bond[b]));
-      w[i] += half, w[j] += half;
-    }
-    for (std::size_t f = 0; nc > 1 && f <= static_cast<std::size_t>(work.bond_level[b]); ++f)
-      w[i * nc + f] += 0.5 * kBondCostPerUpdate, w[j * nc + f] += 0.5 * kBondCostPerUpdate;
-  }
+  const VertexWeights w = vertex_weights(block, work, per_level);
+  const std::size_t nc = w.constraints;
   vwgt.resize(n * nc);
-  for (std::size_t k = 0; k < n * nc; ++k) vwgt[k] = static_cast<idx_t>(std::lround(10 * w[k]));
+  for (std::size_t k = 0; k < n * nc; ++k) vwgt[k] = static_cast<idx_t>(std::lround(10 * w.weight[k]));
   idx_t nv = static_cast<idx_t>(n), ncon = static_cast<idx_t>(nc), np = parts, cut = 0;
   idx_t options[METIS_NOPTIONS];
   METIS_SetDefaultOptions(options);
@@ -110,13 +129,14 @@ std::vector<int> partition_elements(const BondedBlock& block, const ElementWork&
   if (static_cast<std::size_t>(parts) > block.size())
     throw InputError("ranks", std::to_string(parts), "at most one rank per element (" + std::to_string(block.size()) + ")");
   if (how == Partition::metis) {
-    // One constraint per level where that keeps the macro step's sum within 5 % (few elements per
-    // rank cannot balance every level: the seed's 958 on 16 ranks gave 1.17); else the sum alone.
-    std::vector<int> part = metis_parts(block, work, parts, true);
-    const std::vector<double> w = part_work(block, work, part, parts);
-    const double mean = std::accumulate(w.begin(), w.end(), 0.0) / parts;
-    if (*std::max_element(w.begin(), w.end()) <= 1.05 * mean) return part;
-    return metis_parts(block, work, parts, false);
+    // One constraint per level, or the sum alone, whichever gives the shorter macro step (few
+    // elements per rank cannot meet every constraint: the seed's 958 on 16 ranks).
+    std::vector<int> per_level = metis_parts(block, work, parts, true);
+    if (work_levels(work) == 1) return per_level;  // one level: the sum was the only constraint
+    std::vector<int> sum = metis_parts(block, work, parts, false);
+    const double t_level = substep_time(part_level_work(block, work, per_level, parts));
+    const double t_sum = substep_time(part_level_work(block, work, sum, parts));
+    return t_level <= t_sum ? per_level : sum;
   }
   if (how == Partition::slabs) return grid_parts(block, equal_cuts(lo, hi, dims), dims);
   std::vector<WorkSample> samples(block.size());
@@ -136,6 +156,59 @@ std::vector<double> part_work(const BondedBlock& block, const ElementWork& work,
     if (pj != pi) w[static_cast<std::size_t>(pj)] += work.bond[b];
   }
   return w;
+}
+
+int work_levels(const ElementWork& work) {
+  int levels = 1;
+  for (int k : work.level) levels = std::max(levels, k + 1);
+  return levels;
+}
+
+std::vector<std::vector<double>> part_level_work(const BondedBlock& block, const ElementWork& work,
+                                                 const std::vector<int>& part, int parts) {
+  const auto nl = static_cast<std::size_t>(work_levels(work));
+  std::vector<std::vector<double>> w(nl, std::vector<double>(static_cast<std::size_t>(parts), 0.0));
+  for (std::size_t e = 0; e < block.size(); ++e)
+    for (std::size_t f = 0; f <= static_cast<std::size_t>(work.level[e]); ++f) w[f][static_cast<std::size_t>(part[e])] += 1.0;
+  for (std::size_t b = 0; b < block.bonds.size(); ++b) {
+    const int pi = part[static_cast<std::size_t>(block.bonds[b].master)], pj = part[static_cast<std::size_t>(block.bonds[b].slave)];
+    for (std::size_t f = 0; f <= static_cast<std::size_t>(work.bond_level[b]); ++f) {
+      w[f][static_cast<std::size_t>(pi)] += kBondCostPerUpdate;
+      if (pj != pi) w[f][static_cast<std::size_t>(pj)] += kBondCostPerUpdate;
+    }
+  }
+  return w;
+}
+
+std::vector<double> level_imbalance(const std::vector<std::vector<double>>& level_work) {
+  std::vector<double> r;
+  for (const auto& row : level_work) r.push_back(imbalance(row));
+  return r;
+}
+
+namespace {
+
+// sum_f c_f x_f over the levels' rows, x_f from `of` (the row's busiest rank or its mean).
+template <class Of>
+double over_substeps(const std::vector<std::vector<double>>& level_work, Of of) {
+  double sum = 0;
+  for (std::size_t f = 0; f < level_work.size(); ++f)
+    if (!level_work[f].empty()) sum += (f == 0 ? 1.0 : std::ldexp(1.0, static_cast<int>(f) - 1)) * of(level_work[f]);
+  return sum;
+}
+
+double busiest(const std::vector<double>& row) { return *std::max_element(row.begin(), row.end()); }
+double mean(const std::vector<double>& row) {
+  return std::accumulate(row.begin(), row.end(), 0.0) / static_cast<double>(row.size());
+}
+
+}  // namespace
+
+double substep_time(const std::vector<std::vector<double>>& level_work) { return over_substeps(level_work, busiest); }
+
+double substep_imbalance(const std::vector<std::vector<double>>& level_work) {
+  const double m = over_substeps(level_work, mean);
+  return m > 0 ? substep_time(level_work) / m : 1.0;
 }
 
 long cut_bonds(const BondedBlock& block, const std::vector<int>& part) {

@@ -7,9 +7,10 @@
 //             whose elements are on two ranks is evaluated on both, so its cut is work as well.
 //             With levels, one balance constraint per level f: the work of the sub-steps at which
 //             the levels f and finer are due (each sub-step ends in an exchange that waits for every
-//             rank, so each kind of sub-step is balanced, not only the macro step's sum), unless
-//             that leaves the sum more than 5 % above the mean (too few elements per rank): then
-//             the sum alone.
+//             rank, so each kind of sub-step is balanced, not only the macro step's sum). METIS also
+//             partitions for the sum alone, and the partition whose macro step is shorter by
+//             substep_time (below) is taken: with few elements per rank the constraints cannot all
+//             be met (the seed's 958 on 16 ranks).
 // The work is what a macro step of B10 does: element e is updated 2^k_e times, a bond evaluated
 // 2^max(k_i, k_j) times (one level for the uniform step). The owners change no result: an element
 // is integrated by its owner, which sums its forces in bond, contact, hole order (fracture_solver.hpp).
@@ -48,5 +49,23 @@ std::vector<int> partition_elements(const BondedBlock& block, const ElementWork&
 std::vector<double> part_work(const BondedBlock& block, const ElementWork& work, const std::vector<int>& part,
                               int parts);
 long cut_bonds(const BondedBlock& block, const std::vector<int>& part);
+
+// The levels of a work map (1 + the finest element level; 1 for the uniform step).
+int work_levels(const ElementWork& work);
+// Each part's work at a sub-step where the levels f and finer are due, per f = 0 .. levels - 1
+// ([f][part]): its elements' updates at levels >= f and its bonds as fine as f (a cut bond on both).
+// Each of these sub-steps ends in an exchange that waits for every rank, so each row's imbalance is
+// a wait; row 0 (every element due) is the coarsest sub-step.
+std::vector<std::vector<double>> part_level_work(const BondedBlock& block, const ElementWork& work,
+                                                 const std::vector<int>& part, int parts);
+// Each row's imbalance (max over mean).
+std::vector<double> level_imbalance(const std::vector<std::vector<double>>& level_work);
+// A macro step's time in units of work if each sub-step takes its busiest rank's work and ends in
+// an exchange that waits for it: sum_f c_f max_f, where c_f sub-steps of a macro step have f as their
+// coarsest due level (c_0 = 1, c_f = 2^(f-1): the sub-steps j of 2^(L-1) where f = L-1 - (the power
+// of 2 in j)). substep_imbalance divides it by the same sum of the rows' means: the waits that a
+// partition balancing only the macro step's sum leaves.
+double substep_time(const std::vector<std::vector<double>>& level_work);
+double substep_imbalance(const std::vector<std::vector<double>>& level_work);
 
 }  // namespace tessera

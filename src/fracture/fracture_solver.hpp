@@ -119,6 +119,10 @@ class FractureSolver {
   // evaluations at the initial levels, a cut bond on both of its ranks), and the bonds cut.
   std::vector<double> planned_work() const { return part_work(block_, work_, owner_, decomp_.size()); }
   long cut_bond_count() const { return cut_bonds(block_, owner_); }
+  // The same per sub-step kind: row f is the work when the levels f and finer are due.
+  std::vector<std::vector<double>> planned_level_work() const {
+    return part_level_work(block_, work_, owner_, decomp_.size());
+  }
   const ElementWork& work() const { return work_; }
   bool owns(std::size_t e) const { return owner_[e] == decomp_.rank(); }
   // Collective: every rank takes the owners' full state of elements and bonds (before output).

@@ -5,6 +5,8 @@
 //    bodies (scene.xmf), both checkpoints;
 //  - the solid volume equals the bodies' volume and the liquid volume is kept (both to round-off);
 //  - restart: stopped at step 13 and resumed, it ends bit for bit where the straight run ends;
+//  - with output.land_on_times false the snapshot schedule changes no bit of the run (with landing,
+//    the default, it changes the steps);
 //  - 1 and 2 ranks agree to the pressure solver's tolerance.
 #include <gtest/gtest.h>
 #include <mpi.h>
@@ -107,6 +109,41 @@ TEST(CoupledScene, RestartIsBitwiseAtTheSameRankCount) {
   long differ = 0;
   for (std::size_t i = 0; i < a.size(); ++i) differ += a[i] != b[i];
   EXPECT_EQ(differ, 0) << "body state";
+}
+
+// Every value of the fields and bodies of two checkpoints that differs.
+long differing_values(const std::string& a_dir, const std::string& b_dir) {
+  long differ = 0;
+  for (const char* name : {"liquid_fraction", "liquid_content", "velocity", "pressure"}) {
+    const auto a = dataset(a_dir + "/checkpoint.h5", name), b = dataset(b_dir + "/checkpoint.h5", name);
+    EXPECT_EQ(a.size(), b.size());
+    for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) differ += a[i] != b[i];
+  }
+  const auto a = dataset(a_dir + "/checkpoint_bodies.h5", "bodies"), b = dataset(b_dir + "/checkpoint_bodies.h5", "bodies");
+  EXPECT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) differ += a[i] != b[i];
+  return differ;
+}
+
+TEST(CoupledScene, OutputScheduleChangesNothingWithoutLanding) {
+  // Snapshots every 0.7 ms against none, 30 steps of at most 0.2 ms: landing on the snapshot times
+  // (the default) shortens steps; without it the run is the same bit for bit.
+  const std::vector<std::string> none = {"run.max_steps=30", "output.snapshot_interval=0"};
+  const std::vector<std::string> snaps = {"run.max_steps=30", "output.snapshot_interval=0.7 ms"};
+  auto without = [](std::vector<std::string> sets) {
+    sets.push_back("output.land_on_times=false");
+    return sets;
+  };
+  const auto s_none = run_on(2, without(none), kDir + "/sched_none");
+  const auto s_free = run_on(2, without(snaps), kDir + "/sched_free");
+  const auto s_land = run_on(2, snaps, kDir + "/sched_land");
+  if (world_rank() != 0) return;
+  EXPECT_EQ(s_none["time"].get<double>(), s_free["time"].get<double>());
+  EXPECT_EQ(differing_values(kDir + "/sched_none", kDir + "/sched_free"), 0);
+  EXPECT_TRUE(fs::exists(kDir + "/sched_free/fields/fields_00003.h5"));  // the snapshots were written
+  std::printf("  after 30 steps: t %.6g s without snapshots, %.6g s landing on every 0.7 ms\n",
+              s_none["time"].get<double>(), s_land["time"].get<double>());
+  EXPECT_NE(s_none["time"].get<double>(), s_land["time"].get<double>());
 }
 
 TEST(CoupledScene, OneAndTwoRanksAgree) {

@@ -1,12 +1,14 @@
 // SPDX-License-Identifier: MIT
 // Balanced cut planes (core/balance.hpp, issue 19): the cut search equalises a known cost field to
 // within one cell layer, respects the slabs' smallest width and the cell faces, and balances a bed
-// that fills the bottom of a box where equal slabs leave the top ranks idle.
+// that fills the bottom of a box where equal slabs leave the top ranks idle. The blast's levelled
+// sub-steps: a macro step's time from the per-level work, counted by hand.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "core/balance.hpp"
+#include "fracture/element_partition.hpp"
 
 using namespace tessera;
 
@@ -91,4 +93,19 @@ TEST(Balance, NoWorkGivesEqualSlabs) {
   ASSERT_EQ(cuts.size(), 2u);
   EXPECT_DOUBLE_EQ(cuts[0], 1.0);
   EXPECT_DOUBLE_EQ(cuts[1], 2.0);
+}
+
+// Three levels on two ranks, the work per sub-step kind [f][rank]: all due [2, 2], levels 1-2 due
+// [1, 1], level 2 alone [1, 0]. A macro step is 4 sub-steps: j = 1, 3 (level 2 alone, the busiest
+// rank 1 each), j = 2 (1), j = 4 (2): 5 against the means' 0.5 + 1 + 0.5 + 2 = 4.
+TEST(Balance, SubStepsWaitForTheirBusiestRank) {
+  const std::vector<std::vector<double>> work = {{2, 2}, {1, 1}, {1, 0}};
+  EXPECT_DOUBLE_EQ(substep_time(work), 5.0);
+  EXPECT_DOUBLE_EQ(substep_imbalance(work), 1.25);
+  const std::vector<double> rows = level_imbalance(work);
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_DOUBLE_EQ(rows[0], 1.0);
+  EXPECT_DOUBLE_EQ(rows[2], 2.0);
+  // One level: the macro step's own imbalance.
+  EXPECT_DOUBLE_EQ(substep_imbalance({{3, 1}}), 1.5);
 }

@@ -73,27 +73,39 @@ TEST(Cli, BalanceReportsTheImbalanceOfACheckpoint) {
 }
 
 TEST(Cli, BalanceReportsABlastCasesPartitions) {
-  // The blast's elements on 1 and 16 ranks (no checkpoint: the mesh and the initial levels): one
-  // rank holds everything; on 16 the hole's small elements make equal slabs carry several times
-  // the mean, a METIS partition of the element graph within the issue-19 goal of 1.05.
+  // The blast's elements on 1, 4 and 16 ranks (no checkpoint: the mesh and the initial levels): one
+  // rank holds everything; on 4 the hole's small elements make equal slabs carry 1.6 times the
+  // mean, METIS's per-level partition is within the issue-19 goal of 1.05 in the macro step's sum
+  // and in its sub-steps (each waits for its busiest rank). On 16 (60 elements per rank) no
+  // partition reaches the goal; METIS's, the shorter of per-level and sum-only, has the shortest
+  // sub-steps.
   int rank = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   if (rank != 0) return;
   const std::string json = (std::filesystem::temp_directory_path() / "tessera_cli_blast_balance.json").string();
   const std::string case_file = std::string(TESSERA_SOURCE_DIR) + "/cases/blast/blast.yaml";
-  const auto r = run("balance " + case_file + " --ranks 1,16 --set blast.stepping=stability --json " + json);
+  const auto r = run("balance " + case_file + " --ranks 1,4,16 --set blast.stepping=stability --json " + json);
   ASSERT_EQ(r.code, 0) << r.output;
   std::ifstream in(json);
   const auto report = nlohmann::json::parse(in);
   const auto& table = report["table"];
-  ASSERT_EQ(table.size(), 2u);
+  ASSERT_EQ(table.size(), 3u);
   for (const char* how : {"slabs", "balanced", "metis"}) {
     EXPECT_DOUBLE_EQ(table[0][how]["imbalance"].get<double>(), 1.0) << how;
+    EXPECT_DOUBLE_EQ(table[0][how]["substep_imbalance"].get<double>(), 1.0) << how;
     EXPECT_EQ(table[0][how]["cut_bonds"].get<long>(), 0) << how;
-    EXPECT_EQ(table[1][how]["work_per_rank"].size(), 16u) << how;
+    EXPECT_EQ(table[2][how]["work_per_rank"].size(), 16u) << how;
+    EXPECT_GE(table[1][how]["level_imbalance"].size(), 2u) << how;
   }
-  EXPECT_GT(table[1]["slabs"]["imbalance"].get<double>(), 2.0) << r.output;
+  EXPECT_GT(table[1]["slabs"]["imbalance"].get<double>(), 1.5) << r.output;
   EXPECT_LE(table[1]["metis"]["imbalance"].get<double>(), 1.05) << r.output;
+  EXPECT_LE(table[1]["metis"]["substep_imbalance"].get<double>(), 1.05) << r.output;
+  const double metis16 = table[2]["metis"]["substep_imbalance"].get<double>();
+  EXPECT_LT(metis16, table[2]["balanced"]["substep_imbalance"].get<double>()) << r.output;
+  EXPECT_LT(metis16, table[2]["slabs"]["substep_imbalance"].get<double>()) << r.output;
+  // The per-level partition's sum is 1.17 there but its sub-steps 1.19; the sum alone gives 1.04 and
+  // 2.07 (2026-11-30). The choice by the sub-steps' time takes the first; by the sum, the second.
+  EXPECT_LT(metis16, 1.5) << r.output;
 }
 
 }  // namespace
