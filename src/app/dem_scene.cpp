@@ -155,7 +155,7 @@ void DemScene::begin_output(const RunOptions& opt) {
   }
   snapshots_ = std::make_unique<SnapshotSeries>(opt.output_dir + "/snapshots");
   if (snapshot_interval_ > 0) snapshots_->write(*dem_);
-  checks_ = Schedule(check_interval_, dem_->time());
+  checks_ = Schedule(check_interval_, dem_->time(), dem_->steps() > 0 ? dem_->dt() : 0.0);
 }
 
 void DemScene::step(const RunOptions& opt) {

@@ -45,8 +45,8 @@ nlohmann::json SteppedScene::run(const RunOptions& opt, const nlohmann::json& re
   MPI_Barrier(comm);
   begin_output(opt);
   start_steps_ = steps();
-  snapshots_ = Schedule(snapshot_interval_, time());
-  checkpoints_ = Schedule(checkpoint_interval_, time());
+  snapshots_ = Schedule(snapshot_interval_, time(), last_dt());
+  checkpoints_ = Schedule(checkpoint_interval_, time(), last_dt());
   double last_progress = 0;
   MPI_Barrier(comm);
   const double loop_start = wall();

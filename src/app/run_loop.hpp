@@ -48,8 +48,10 @@ namespace tessera {
 class Schedule {
  public:
   Schedule() = default;
-  Schedule(double interval, double time_now) : interval_(interval) {
-    if (interval_ > 0) k_ = static_cast<long>(std::floor(time_now / interval_ + 1e-9)) + 1;
+  // The first event not yet fired at time_now, the step just taken being last_dt: an event within
+  // half that step after time_now fired with it (due()), so a restart does not fire it again.
+  Schedule(double interval, double time_now, double last_dt = 0) : interval_(interval) {
+    if (interval_ > 0) k_ = static_cast<long>(std::floor((time_now + 0.5 * last_dt) / interval_ + 1e-9)) + 1;
   }
   double next() const { return interval_ > 0 ? static_cast<double>(k_) * interval_ : 1e300; }
   // True (and moves on to the next event time) when `time` is within dt/2 of the event time or past it.

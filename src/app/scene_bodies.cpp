@@ -138,7 +138,7 @@ void SceneBodies::begin(const std::optional<std::string>& restart, const std::st
   bodies_out_ = std::make_unique<SnapshotSeries>(dir + "/snapshots");
   bodies_out_->write_loads(coupled_->loads_computed());
   if (crater_) crater_->open(dir, restart.has_value() && fs::exists(dir + "/crater.csv"), flow_.grid().rank() == 0);
-  checks_ = Schedule(check_interval_, flow_.time());
+  checks_ = Schedule(check_interval_, flow_.time(), flow_.last_dt());
 }
 
 void SceneBodies::add_fields(FieldSeries& fields) const {
