@@ -1,16 +1,15 @@
 // SPDX-License-Identifier: MIT
 // A sphere settling in a viscous liquid against ten Cate et al. (2002, Phys. Fluids 14, 4012), case
-// E3: a 15 mm nylon sphere (1120 kg/m^3) in silicone oil (962 kg/m^3, 0.113 Pa s) in a closed
-// 100 x 100 x 160 mm box, measured terminal speed 0.091 m/s (Re 11.6). The shipped case
-// (cases/coupled/settling_sphere.yaml) on 4.2 and 8.4 cells per diameter: the largest downward
-// speed over 0.8 s must come within 7 % of the measurement on both grids. The bound: the finest run
-// made (16.8 cells per diameter, seed's correction, 1.77 million cells, docs/validation.md) is 5.1 %
-// slow, which is what the grid converges to; 2 % is left for the partly covered cells of the coarse
-// grids. (Until 2026-11-30, with the seed's per-step correction, the bound was 5 % on the finer grid
-// with the error falling with the grid; the rate's drag (theory C4c) gives -3.9 % and -6.0 %.)
-// For scale: Schiller-Naumann's drag gives 0.094 m/s unbounded.
-// tools/settling_sphere.py runs the study with the third grid (16.8 cells per diameter) and draws
-// the approach to terminal speed.
+// E3: a 15 mm nylon sphere (1120 kg/m^3) in silicone oil (962 kg/m^3, 0.113 Pa s) in a closed box of
+// 100 x 100 mm cross-section, measured terminal speed 0.091 m/s (Re 11.6). The shipped case
+// (cases/coupled/settling_sphere.yaml: the experiment's 160 mm box and 0.8 s) on a box twice as tall
+// (320 mm, the sphere starting 40 mm below the top as in the experiment) and to 1.5 s: in the
+// experiment's box the sphere is still rising at 0.8 s (2 % below the speed it ends at on 4.2 cells
+// per diameter, 2026-11-30), and the measurement is the terminal speed. On 4.2 and 8.4 cells per
+// diameter the terminal speed must come within 3 % of the measurement (measured 2026-11-30: -0.4 %
+// and -2.7 %). The error grows with the grid, which is open (issue 15, docs/validation.md); 3 % is
+// the 8.4-cell grid's error with the margin of the last 0.06 % the sphere was still rising by.
+// For scale: Schiller-Naumann's drag gives 0.093 m/s unbounded.
 #include <gtest/gtest.h>
 #include <mpi.h>
 
@@ -50,17 +49,25 @@ double terminal_speed(const std::string& dir) {
 
 }  // namespace
 
-TEST(SettlingSphere, TenCateE3TerminalSpeed) {
+// The terminal speed on nx x nx x nz cells (nx across the 100 mm box) in the 320 mm box.
+void check_terminal_speed(int nx, int nz) {
   const double measured = 0.091;
-  for (const char* cells : {"[28,28,44]", "[56,56,88]"}) {
-    const std::string dir = std::string("settling_out/") + cells;
-    test::run_case_on(test::world_size(), case_text(),
-                      {std::string("fluid.cells=") + cells, "output.snapshot_interval=0", "output.progress_interval=1000"},
-                      dir);
-    if (test::world_rank() != 0) continue;
-    const double u = terminal_speed(dir), err = std::abs(u - measured) / measured;
-    std::printf("  cells %s: terminal speed %.4f m/s, measured %.3f m/s, error %.1f %%\n", cells, u, measured,
-                100 * err);
-    EXPECT_LT(err, 0.07);
-  }
+  const std::string cells = "[" + std::to_string(nx) + "," + std::to_string(nx) + "," + std::to_string(nz) + "]";
+  const std::string dir = "settling_out/tall_" + std::to_string(nx);
+  const std::string top = "[50 mm, 50 mm, 320 mm]";
+  test::run_case_on(test::world_size(), case_text(),
+                    {"fluid.cells=" + cells, "domain.box_max=" + top, "solid.walls.0.max=" + top,
+                     "initial.liquid.0.box.max=" + top, "bodies.list.0.position=[0, 0, 280 mm]", "run.end_time=1.5 s",
+                     "output.snapshot_interval=0", "output.progress_interval=1000"},
+                    dir);
+  if (test::world_rank() != 0) return;
+  const double u = terminal_speed(dir), err = (u - measured) / measured;
+  std::printf("  cells %s (%.1f per diameter): terminal speed %.4f m/s, measured %.3f m/s, error %+.1f %%\n",
+              cells.c_str(), 15.0 * nx / 100.0, u, measured, 100 * err);
+  EXPECT_LT(std::abs(err), 0.03);
+}
+
+TEST(SettlingSphere, TenCateE3TerminalSpeed) {
+  check_terminal_speed(28, 88);   // 4.2 cells per diameter, 25 s on 2 ranks
+  check_terminal_speed(56, 176);  // 8.4, 3.5 minutes
 }
