@@ -64,9 +64,11 @@ int FractureSolver::mark_stale(double horizon) {
   }
   if (horizon > 0) {
     // Each element's bound from its owner (which lists all its pairs), then every rank alike.
-    std::vector<double> speed(n);
+    std::vector<double>& speed = scratch_speed_;
+    speed.resize(n);
     for (std::size_t e = 0; e < n; ++e) speed[e] = norm(v_[e]) + norm(w_[e]) * reach_[e];
-    std::vector<double> fastest = speed;
+    std::vector<double>& fastest = scratch_fastest_;
+    fastest.assign(speed.begin(), speed.end());
     for (const auto& [sa, sb] : pairs_) {
       const std::size_t a = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(sa)].element);
       const std::size_t b = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(sb)].element);
@@ -159,7 +161,8 @@ void FractureSolver::build_list() {
   listed_spheres_ = spheres_.size();
   build_x_ = x_, build_q_ = q_;
   const std::size_t n = spheres_.size();
-  std::vector<Vec3> at(n);
+  std::vector<Vec3>& at = scratch_at_;
+  at.resize(n);
   for (std::size_t s = 0; s < n; ++s) at[s] = sphere_position(s);
   cell_radius_ = max_radius_;
   cell_size_ = 2 * max_radius_ + skin_;
@@ -229,7 +232,8 @@ void FractureSolver::refresh_list() {
     return stale_[static_cast<std::size_t>(spheres_[static_cast<std::size_t>(p.first)].element)] ||
            stale_[static_cast<std::size_t>(spheres_[static_cast<std::size_t>(p.second)].element)];
   });
-  std::vector<Vec3> at(n);
+  std::vector<Vec3>& at = scratch_at_;
+  at.resize(n);
   for (std::size_t s = 0; s < n; ++s) at[s] = sphere_position(s);
   reset_cells();  // where every sphere is now (a searched element's spheres may be far from the last build)
   for (std::size_t s = 0; s < n; ++s) insert_cell(static_cast<int>(s), at[s]);

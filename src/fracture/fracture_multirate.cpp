@@ -145,7 +145,8 @@ void FractureSolver::multirate_step() {
   min_dt_ = std::min(min_dt_, h_min);
   if (h_min <= min_dt_) min_dt_time_ = time_;
   newly_broken_.clear();
-  std::vector<std::vector<int>> due(static_cast<std::size_t>(P));
+  std::vector<std::vector<int>>& due = due_;  // each rank's elements due at a sub-step (storage kept)
+  due.resize(static_cast<std::size_t>(P));
   for (long s = 0; s < substeps; ++s) {
     const double t = time_ + static_cast<double>(s) * h_min;
     const int first = s == 0 ? 0 : K - std::countr_zero(static_cast<unsigned long>(s));

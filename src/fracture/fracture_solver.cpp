@@ -227,19 +227,23 @@ void FractureSolver::drift() {
 namespace {
 template <class Pack, class Unpack>
 void all_gather_elements(MPI_Comm comm, int rank, const std::vector<std::vector<int>>& owned, int width, Pack pack,
-                         Unpack unpack) {
+                         Unpack unpack, GatherBuffers& buf) {
   const int P = static_cast<int>(owned.size());
-  std::vector<int> counts(static_cast<std::size_t>(P)), displs(static_cast<std::size_t>(P));
+  std::vector<int>& counts = buf.counts;
+  std::vector<int>& displs = buf.displs;
+  counts.resize(static_cast<std::size_t>(P)), displs.resize(static_cast<std::size_t>(P));
   int total = 0;
   for (int r = 0; r < P; ++r) {
     counts[static_cast<std::size_t>(r)] = width * static_cast<int>(owned[static_cast<std::size_t>(r)].size());
     displs[static_cast<std::size_t>(r)] = total;
     total += counts[static_cast<std::size_t>(r)];
   }
-  std::vector<double> mine(static_cast<std::size_t>(counts[static_cast<std::size_t>(rank)]));
+  std::vector<double>& mine = buf.mine;
+  mine.resize(static_cast<std::size_t>(counts[static_cast<std::size_t>(rank)]));
   std::size_t k = 0;
   for (int e : owned[static_cast<std::size_t>(rank)]) pack(e, &mine[k]), k += static_cast<std::size_t>(width);
-  std::vector<double> all(static_cast<std::size_t>(total));
+  std::vector<double>& all = buf.all;
+  all.resize(static_cast<std::size_t>(total));
   MPI_Allgatherv(mine.data(), counts[static_cast<std::size_t>(rank)], MPI_DOUBLE, all.data(), counts.data(),
                  displs.data(), MPI_DOUBLE, comm);
   for (int r = 0; r < P; ++r) {
@@ -268,7 +272,8 @@ void FractureSolver::exchange_elements(const std::vector<std::vector<int>>& list
         const std::size_t i = static_cast<std::size_t>(e);
         x_[i] = {s[0], s[1], s[2]}, q_[i] = {s[3], s[4], s[5], s[6]};
         v_[i] = {s[7], s[8], s[9]}, w_[i] = {s[10], s[11], s[12]}, t_el_[i] = s[13];
-      });
+      },
+      gather_);
 }
 
 void FractureSolver::sync_state() {
@@ -288,7 +293,8 @@ void FractureSolver::sync_state() {
         x_[i] = {s[0], s[1], s[2]}, q_[i] = {s[3], s[4], s[5], s[6]};
         v_[i] = {s[7], s[8], s[9]}, w_[i] = {s[10], s[11], s[12]}, L_[i] = {s[13], s[14], s[15]};
         F_[i] = {s[16], s[17], s[18]}, T_[i] = {s[19], s[20], s[21]};
-      });
+      },
+      gather_);
   // Bonds: the master's owner holds the current state.
   std::vector<std::vector<int>> bonds_by_rank(static_cast<std::size_t>(decomp_.size()));
   for (std::size_t b = 0; b < block_.bonds.size(); ++b)
@@ -304,7 +310,8 @@ void FractureSolver::sync_state() {
       [&](int b, const double* o) {
         auto& s = bond_state_[static_cast<std::size_t>(b)];
         for (int k = 0; k < 3; ++k) s[k].slip[0] = o[3 * k], s[k].slip[1] = o[3 * k + 1], s[k].u_max = o[3 * k + 2];
-      });
+      },
+      gather_);
 }
 
 void FractureSolver::restore(const std::vector<Vec3>& x, const std::vector<Quaternion>& q, const std::vector<Vec3>& v,

@@ -33,6 +33,12 @@
 
 namespace tessera {
 
+// Storage of the all-gathers of element states (every sub-step with levels), reused.
+struct GatherBuffers {
+  std::vector<int> counts, displs;
+  std::vector<double> mine, all;
+};
+
 // The borehole's gas pressure (seed eq. 4, B8): a cos^2 rise over a, a cosine fall over b a.
 struct Borehole {
   Vec3 centre{};             // a point on the axis
@@ -245,6 +251,11 @@ class FractureSolver {
   std::vector<double> reach_;  // each element's farthest vertex from its centroid
   std::vector<double> moved_;  // each element's travel since its spheres were last searched
   std::vector<char> stale_;
+  // Storage mark_stale and refresh_list reuse every macro step (speeds, partners' fastest, positions).
+  std::vector<double> scratch_speed_, scratch_fastest_;
+  std::vector<Vec3> scratch_at_;
+  GatherBuffers gather_;
+  std::vector<std::vector<int>> due_;  // the multirate step's due elements per rank
   std::vector<std::vector<int>> element_spheres_;
   std::vector<int> unlisted_bonds_;  // released since the list was last made
   std::size_t listed_spheres_ = 0;
