@@ -7,6 +7,19 @@ each run's summary.json into speed-up, parallel efficiency and the time per phas
   tools/scaling.py slurm CASE.yaml --ranks 1,2,4,8,16 [--time 02:00:00] [--partition P] [--out D]
         writes D/scaling_P.sbatch per rank count and D/submit.sh (sbatch each); then `report`
   tools/scaling.py report --out D [--png FILE]
+  tools/scaling.py network --out D          (mpirun -n 2; needs python3-mpi4py) the all-gather's cost
+        on this machine, t = latency + bytes / bandwidth fitted over 8 B - 1 MB, in D/network.json
+  tools/scaling.py model CASE.yaml --ranks 2,4,16,64 --out D [--set ...]   (the blast's levelled step)
+        predicts the loop time on P ranks from D's 1-rank runs, the work per rank and sub-step kind
+        that `tessera balance` computes for P on one process, and D/network.json; where D holds
+        measured runs on P ranks it prints the model's error
+
+The model (blast, stability levels): every sub-step takes its busiest rank's work and ends in an
+all-gather of the elements due. A macro step's compute time is proportional to substep_time (the
+sum over sub-step kinds f, c_f of them per macro step, of the busiest rank's work; element_partition.hpp),
+so T(P) = T(1) substep_time(P) / substep_time(1) + steps sum_f c_f (latency ceil(log2 P) + 112 N_f
+(P - 1) / P / bandwidth), N_f the elements due at kind f (14 doubles each). T(1) is the measured
+1-rank loop time: its contact work, which the partition cannot plan, is assumed to split as the rest.
 
 The time of a run is its loop_seconds (the time-step loop, as LAMMPS' Loop time: set-up and the
 final output not counted); with --repeat the median, repeats alternating over the rank counts.
@@ -17,6 +30,7 @@ timers, per_rank). TESSERA names the binary (default build/bin/tessera).
 import argparse
 import glob
 import json
+import math
 import os
 import shlex
 import statistics
@@ -147,6 +161,92 @@ def report(a):
         print(f"wrote {a.png}")
 
 
+def network(a):
+    """The all-gather's cost between 2 ranks: run under mpirun by itself (`network --measure`)."""
+    if not a.measure:
+        os.makedirs(a.out, exist_ok=True)
+        env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+                   OMPI_MCA_rmaps_base_oversubscribe="1")
+        subprocess.run(["mpirun", "-n", "2", sys.executable, os.path.abspath(__file__), "network", "--measure",
+                        "--out", a.out], check=True, env=env)
+        print(open(os.path.join(a.out, "network.json")).read())
+        return
+    from mpi4py import MPI
+    import numpy as np
+    comm = MPI.COMM_WORLD
+    rows = []
+    for size in (1, 16, 128, 1024, 8192, 65536, 131072):  # doubles per rank
+        mine = np.zeros(size)
+        everything = np.zeros(size * comm.size)
+        counts = [size] * comm.size
+        for _ in range(20):  # warm-up
+            comm.Allgatherv(mine, [everything, counts])
+        reps = max(20, 20000 // size)
+        comm.Barrier()
+        t = MPI.Wtime()
+        for _ in range(reps):
+            comm.Allgatherv(mine, [everything, counts])
+        dt = (MPI.Wtime() - t) / reps
+        rows.append((8.0 * size * (comm.size - 1), comm.allreduce(dt, op=MPI.MAX)))
+    if comm.rank == 0:
+        x = np.array([r[0] for r in rows])
+        y = np.array([r[1] for r in rows])
+        slope, intercept = np.polyfit(x, y, 1)
+        json.dump({"ranks": comm.size, "latency_s": float(intercept), "bandwidth_bytes_per_s": float(1 / slope),
+                   "samples": [{"bytes_received": r[0], "seconds": r[1]} for r in rows]},
+                  open(os.path.join(a.out, "network.json"), "w"), indent=1)
+
+
+def model(a):
+    runs = load(a.out)
+    if 1 not in runs:
+        sys.exit(f"scaling model: no 1-rank run in {a.out} (tools/scaling.py run CASE --ranks 1,2 --out {a.out})")
+    net_path = os.path.join(a.out, "network.json")
+    if not os.path.exists(net_path):
+        sys.exit(f"scaling model: no {net_path} (tools/scaling.py network --out {a.out})")
+    net = json.load(open(net_path))
+    t1 = statistics.median(s["loop_seconds"] for s in runs[1])
+    steps = runs[1][0]["steps"]
+    ranks = sorted(set([1] + a.ranks))
+    bal = os.path.join(a.out, "balance.json")
+    cmd = [TESSERA, "balance", os.path.abspath(a.case), "--ranks", ",".join(map(str, ranks)), "--json", bal]
+    for x in a.set:
+        cmd += ["--set", x]
+    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+    b = json.load(open(bal))
+    how, n_f = b["partition"], b["level_elements"]
+
+    def c(f):
+        return 1.0 if f == 0 else 2.0 ** (f - 1)
+
+    def substep_time(level_work):
+        return sum(c(f) * max(row) for f, row in enumerate(level_work))
+
+    base = substep_time(b["table"][0][how]["level_work"])
+    print(f"model: {b['case']}, partition {how}, {b['elements']} elements, {len(n_f)} levels, {steps} macro steps; "
+          f"1 rank {t1:.2f} s; all-gather latency {1e6 * net['latency_s']:.1f} us, "
+          f"{net['bandwidth_bytes_per_s'] / 1e9:.2f} GB/s")
+    print("| ranks | compute (s) | exchange (s) | predicted loop time (s) | speed-up | efficiency | measured (s) | model error |")
+    print("|---|---|---|---|---|---|---|---|")
+    result = []
+    for row in b["table"]:
+        p = row["ranks"]
+        compute = t1 * substep_time(row[how]["level_work"]) / base
+        exchange = 0.0
+        if p > 1:
+            hops = math.ceil(math.log2(p))
+            exchange = steps * sum(c(f) * (hops * net["latency_s"] + 112.0 * n * (p - 1) / p / net["bandwidth_bytes_per_s"])
+                                   for f, n in enumerate(n_f))
+        t = compute + exchange
+        measured = statistics.median(s["loop_seconds"] for s in runs[p]) if p in runs else None
+        err = "-" if measured is None else f"{100 * (t - measured) / measured:+.1f} %"
+        print(f"| {p} | {compute:.2f} | {exchange:.2f} | {t:.2f} | {t1 / t:.2f} | {t1 / t / p:.2f} | "
+              f"{'-' if measured is None else f'{measured:.2f}'} | {err} |")
+        result.append({"ranks": p, "compute": compute, "exchange": exchange, "predicted": t, "measured": measured})
+    json.dump({"case": b["case"], "partition": how, "rows": result}, open(os.path.join(a.out, "model.json"), "w"),
+              indent=1)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="mode", required=True)
@@ -165,8 +265,16 @@ def main():
     p = sub.add_parser("report")
     p.add_argument("--out", default="runs/scaling")
     p.add_argument("--png")
+    p = sub.add_parser("network")
+    p.add_argument("--out", default="runs/scaling")
+    p.add_argument("--measure", action="store_true", help=argparse.SUPPRESS)
+    p = sub.add_parser("model")
+    p.add_argument("case")
+    p.add_argument("--ranks", type=lambda s: [int(x) for x in s.split(",")], required=True)
+    p.add_argument("--set", action="append", default=[])
+    p.add_argument("--out", default="runs/scaling")
     a = ap.parse_args()
-    {"run": run, "slurm": slurm, "report": report}[a.mode](a)
+    {"run": run, "slurm": slurm, "report": report, "network": network, "model": model}[a.mode](a)
 
 
 if __name__ == "__main__":

@@ -53,6 +53,7 @@ int blast_balance_report(const BalanceRequest& rq, const ConfigNode& root) {
       row[partition_name(how)] = {{"imbalance", imbalance(work)},
                                   {"substep_imbalance", substeps},
                                   {"level_imbalance", level_imbalance(level_work)},
+                                  {"level_work", level_work},
                                   {"cut_bonds", cut},
                                   {"work_per_rank", work}};
     }
@@ -61,7 +62,17 @@ int blast_balance_report(const BalanceRequest& rq, const ConfigNode& root) {
   }
   if (!rq.json_out.empty()) {
     std::ofstream out(rq.json_out);
-    out << nlohmann::json{{"case", rq.case_file}, {"elements", block.size()}, {"table", table}}.dump(2) << "\n";
+    // Elements due at each kind of sub-step (levels f and finer): what the exchange after it moves.
+    std::vector<long> level_elements(static_cast<std::size_t>(work_levels(solver.work())), 0);
+    for (int k : solver.work().level)
+      for (int f = 0; f <= k; ++f) ++level_elements[static_cast<std::size_t>(f)];
+    out << nlohmann::json{{"case", rq.case_file},
+                          {"elements", block.size()},
+                          {"partition", partition_name(c.settings.partition)},
+                          {"level_elements", level_elements},
+                          {"table", table}}
+               .dump(2)
+        << "\n";
   }
   return 0;
 }
