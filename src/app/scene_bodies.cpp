@@ -92,11 +92,38 @@ void SceneBodies::create_bodies() {
     read_checkpoint(bodies_file_, *dem_);
     dem_->set_clock(0.0, 0);
     dem_->setup(false);
-    return;
+  } else {
+    std::int64_t id = 0;
+    for (const BodySpec& b : body_list_) dem_->add_body(id++, b.material, b.shape, b.x, b.q, b.v, b.omega, b.density);
+    dem_->setup(true);
   }
-  std::int64_t id = 0;
-  for (const BodySpec& b : body_list_) dem_->add_body(id++, b.material, b.shape, b.x, b.q, b.v, b.omega, b.density);
-  dem_->setup(true);
+  // A body outside the box (a bed made in a taller box, a grain still in flight above this lid) is
+  // refused here: the flow cannot hold it, and its first step would fail far from the cause.
+  if (const auto out = body_outside()) {
+    std::ostringstream m;
+    m << "body " << out->first << " at (" << out->second.x << ", " << out->second.y << ", " << out->second.z
+      << ") m lies outside the domain; every body's centre inside the box";
+    throw InputError(bodies_file_.empty() ? "bodies.list" : "bodies.file", bodies_file_, m.str());
+  }
+}
+
+std::optional<std::pair<std::int64_t, Vec3>> SceneBodies::body_outside() const {
+  const ParticleStore& p = dem_->particles();
+  const Vec3 lo = decomp_.global_lo(), hi = decomp_.global_hi();
+  std::int64_t outside = std::numeric_limits<std::int64_t>::max();  // lowest id of a body out of the box
+  Vec3 where{};
+  for (std::size_t i = 0; i < p.owned; ++i) {
+    const Vec3 x = p.pos(i);
+    if ((x.x < lo.x || x.x > hi.x || x.y < lo.y || x.y > hi.y || x.z < lo.z || x.z > hi.z) && p.id[i] < outside)
+      outside = p.id[i], where = x;
+  }
+  std::int64_t lowest = outside;
+  MPI_Allreduce(MPI_IN_PLACE, &lowest, 1, MPI_INT64_T, MPI_MIN, decomp_.comm());
+  if (lowest == std::numeric_limits<std::int64_t>::max()) return std::nullopt;
+  double c[3] = {0, 0, 0};  // its centre, from its owner
+  if (outside == lowest) c[0] = where.x, c[1] = where.y, c[2] = where.z;
+  MPI_Allreduce(MPI_IN_PLACE, c, 3, MPI_DOUBLE, MPI_SUM, decomp_.comm());
+  return std::make_pair(lowest, Vec3{c[0], c[1], c[2]});
 }
 
 CheckpointExtras SceneBodies::extras() const {
@@ -175,16 +202,8 @@ CoupledStepStats SceneBodies::step(double dt) {
 bool SceneBodies::check(const std::function<void(const std::string&)>& fail) {
   if (!checks_.due(flow_.time(), flow_.last_dt())) return false;
   const DemStats s = dem_->stats();
-  const ParticleStore& p = dem_->particles();
-  const Vec3 lo = decomp_.global_lo(), hi = decomp_.global_hi();
-  std::int64_t outside = std::numeric_limits<std::int64_t>::max();  // lowest id of a body out of the box
-  for (std::size_t i = 0; i < p.owned; ++i) {
-    const Vec3 x = p.pos(i);
-    if (x.x < lo.x || x.x > hi.x || x.y < lo.y || x.y > hi.y || x.z < lo.z || x.z > hi.z) outside = std::min(outside, p.id[i]);
-  }
-  MPI_Allreduce(MPI_IN_PLACE, &outside, 1, MPI_INT64_T, MPI_MIN, decomp_.comm());
-  if (outside != std::numeric_limits<std::int64_t>::max())
-    fail("body " + std::to_string(outside) + " left the box (a wall it passed through, or a blow-up)");
+  if (const auto out = body_outside())
+    fail("body " + std::to_string(out->first) + " left the box (a wall it passed through, or a blow-up)");
   if (s.finite && s.max_overlap_ratio <= max_overlap_ratio_) return rest_.check(s, flow_.time());
   std::ostringstream m;
   if (!s.finite)

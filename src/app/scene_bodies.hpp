@@ -66,6 +66,8 @@ class SceneBodies {
 
  private:
   void create_bodies();
+  // Collective: the lowest id of a body whose centre lies outside the box (or none), with its centre.
+  std::optional<std::pair<std::int64_t, Vec3>> body_outside() const;
   CheckpointExtras extras() const;
   void restore_extras(const CheckpointExtras& e);
   double free_liquid_volume() const;

@@ -10,7 +10,8 @@
 //  - the crater quantities and files exist; 1 and 2 ranks agree (the bed bit for bit, the crater
 //    after the flow steps to the pressure solver's tolerance); a restart continues crater.csv and
 //    ends bit for bit where the straight run ends;
-//  - a drop that would start in the bed is refused at set-up, naming the key;
+//  - a drop that would start in the bed is refused at set-up, naming the key; so is a bed with a body
+//    outside the box, naming the body;
 //  - the bed's boosted fall (theory D0): before any grain touches, the mean speed is 4 g t; the run
 //    ends after_landing after the top grain's landing.
 #include <gtest/gtest.h>
@@ -150,6 +151,25 @@ TEST(DropOnSand, RefusesADropInTheBed) {
         }
       },
       InputError);
+}
+
+TEST(DropOnSand, RefusesABodyOutsideTheBox) {
+  // The bed's second lattice layer lies above a lid at 2.6 mm (a bed made in a taller box, or a grain
+  // still in flight above the impact's lid): refused at set-up, naming the body, before any output.
+  const std::string top = "[33.8 mm, 33.8 mm, 2.6 mm]";
+  EXPECT_THROW(
+      {
+        try {
+          drop_run(world_size(), {"run.max_steps=1", "domain.box_max=" + top, "solid.walls.0.max=" + top},
+                   kDir + "/outside");
+        } catch (const InputError& e) {
+          EXPECT_NE(std::string(e.what()).find("outside the domain"), std::string::npos) << e.what();
+          EXPECT_NE(std::string(e.what()).find("body "), std::string::npos) << e.what();
+          throw;
+        }
+      },
+      InputError);
+  EXPECT_FALSE(fs::exists(kDir + "/outside/summary.json"));
 }
 
 TEST(DropOnSand, BedFallsAtFourGUntilTheTopGrainLands) {
