@@ -7,19 +7,32 @@ each run's summary.json into speed-up, parallel efficiency and the time per phas
   tools/scaling.py slurm CASE.yaml --ranks 1,2,4,8,16 [--time 02:00:00] [--partition P] [--out D]
         writes D/scaling_P.sbatch per rank count and D/submit.sh (sbatch each); then `report`
   tools/scaling.py report --out D [--png FILE]
-  tools/scaling.py network --out D          (mpirun -n 2; needs python3-mpi4py) the all-gather's cost
-        on this machine, t = latency + bytes / bandwidth fitted over 8 B - 1 MB, in D/network.json
-  tools/scaling.py model CASE.yaml --ranks 2,4,16,64 --out D [--set ...]   (the blast's levelled step)
-        predicts the loop time on P ranks from D's 1-rank runs, the work per rank and sub-step kind
-        that `tessera balance` computes for P on one process, and D/network.json; where D holds
-        measured runs on P ranks it prints the model's error
+  tools/scaling.py network --out D          (mpirun -n 2; needs python3-mpi4py) this machine's MPI costs,
+        t = latency + bytes / bandwidth fitted over 8 B - 1 MB for the all-gather and for the halo's
+        MPI_Sendrecv, and a two-double all-reduce, in D/network.json
+  tools/scaling.py model CASE.yaml --ranks 2,4,16,64 --out D [--bodies CHECKPOINT] [--cuts balanced] [--set ...]
+        predicts the loop time on P ranks from D's 1-rank runs, the work per rank that `tessera balance`
+        counts for P on one process, and D/network.json; where D holds measured runs on P ranks it
+        prints the model's error. The blast (its levelled step), or a DEM scene of spheres or discs
+        whose bodies --bodies gives (the run's starting checkpoint).
 
-The model (blast, stability levels): every sub-step takes its busiest rank's work and ends in an
+The blast's model (stability levels): every sub-step takes its busiest rank's work and ends in an
 all-gather of the elements due. A macro step's compute time is proportional to substep_time (the
-sum over sub-step kinds f, c_f of them per macro step, of the busiest rank's work; element_partition.hpp),
-so T(P) = T(1) substep_time(P) / substep_time(1) + steps sum_f c_f (latency ceil(log2 P) + 112 N_f
-(P - 1) / P / bandwidth), N_f the elements due at kind f (14 doubles each). T(1) is the measured
-1-rank loop time: its contact work, which the partition cannot plan, is assumed to split as the rest.
+sum over sub-step kinds f, c_f of them per macro step, of the busiest rank's work; element_partition.hpp,
+written by `tessera balance` per partition), so T(P) = T(1) substep_time(P) / substep_time(1) + steps
+sum_f c_f (latency ceil(log2 P) + 112 N_f (P - 1) / P / bandwidth), N_f the elements due at kind f
+(14 doubles each). T(1) is the measured 1-rank loop time: its contact work, which the partition
+cannot plan, is assumed to split as the rest.
+
+The DEM model: every step ends in an all-reduce (the list check), so the busiest rank sets the
+pace. Rank r's step costs the 1-rank run's contact time times its share of the listed pairs (a pair
+across a cut counted on both sides), the integration, wall forces and the rest times its share of
+the bodies, and the list build and check times its share of owned plus ghost bodies
+(solid/rank_load.hpp, counted from the checkpoint for the cuts a run on P ranks has). Then per
+step each of the halo's swaps (two per split direction) at the sendrecv latency plus the busiest
+receiver's ghosts x 72 bytes over the bandwidth, and ceil(log2 P) all-reduces (and, with free
+spheres or moving meshes, two all-gathers of their loads at the all-gather's latency). The work is taken
+where the checkpoint has it: a scene whose work moves (a deposition) is outside the model.
 
 The time of a run is its loop_seconds (the time-step loop, as LAMMPS' Loop time: set-up and the
 final output not counted); with --repeat the median, repeats alternating over the rank counts.
@@ -188,12 +201,41 @@ def network(a):
             comm.Allgatherv(mine, [everything, counts])
         dt = (MPI.Wtime() - t) / reps
         rows.append((8.0 * size * (comm.size - 1), comm.allreduce(dt, op=MPI.MAX)))
+    # The DEM halo's swap: one MPI_Sendrecv with the neighbour (each rank sends and receives size
+    # doubles), as Halo::forward.
+    swaps = []
+    other = (comm.rank + 1) % comm.size
+    for size in (1, 16, 128, 1024, 8192, 65536, 131072):
+        out, back = np.zeros(size), np.zeros(size)
+        for _ in range(20):
+            comm.Sendrecv(out, dest=other, recvbuf=back, source=other)
+        reps = max(20, 20000 // size)
+        comm.Barrier()
+        t = MPI.Wtime()
+        for _ in range(reps):
+            comm.Sendrecv(out, dest=other, recvbuf=back, source=other)
+        dt = (MPI.Wtime() - t) / reps
+        swaps.append((8.0 * size, comm.allreduce(dt, op=MPI.MAX)))
+    # The DEM's per-step check (two doubles, MPI_MAX).
+    two = np.zeros(2)
+    for _ in range(100):
+        comm.Allreduce(MPI.IN_PLACE, two, op=MPI.MAX)
+    comm.Barrier()
+    t = MPI.Wtime()
+    for _ in range(5000):
+        comm.Allreduce(MPI.IN_PLACE, two, op=MPI.MAX)
+    allreduce = comm.allreduce((MPI.Wtime() - t) / 5000, op=MPI.MAX)
     if comm.rank == 0:
-        x = np.array([r[0] for r in rows])
-        y = np.array([r[1] for r in rows])
-        slope, intercept = np.polyfit(x, y, 1)
-        json.dump({"ranks": comm.size, "latency_s": float(intercept), "bandwidth_bytes_per_s": float(1 / slope),
-                   "samples": [{"bytes_received": r[0], "seconds": r[1]} for r in rows]},
+        def fit(samples):
+            slope, intercept = np.polyfit(np.array([r[0] for r in samples]), np.array([r[1] for r in samples]), 1)
+            return float(intercept), float(1 / slope)
+        lat, bw = fit(rows)
+        p2p_lat, p2p_bw = fit(swaps)
+        json.dump({"ranks": comm.size, "latency_s": lat, "bandwidth_bytes_per_s": bw,
+                   "sendrecv_latency_s": p2p_lat, "sendrecv_bandwidth_bytes_per_s": p2p_bw,
+                   "allreduce_s": allreduce,
+                   "samples": [{"bytes_received": r[0], "seconds": r[1]} for r in rows],
+                   "sendrecv_samples": [{"bytes_each_way": r[0], "seconds": r[1]} for r in swaps]},
                   open(os.path.join(a.out, "network.json"), "w"), indent=1)
 
 
@@ -205,46 +247,108 @@ def model(a):
     if not os.path.exists(net_path):
         sys.exit(f"scaling model: no {net_path} (tools/scaling.py network --out {a.out})")
     net = json.load(open(net_path))
-    t1 = statistics.median(s["loop_seconds"] for s in runs[1])
-    steps = runs[1][0]["steps"]
     ranks = sorted(set([1] + a.ranks))
     bal = os.path.join(a.out, "balance.json")
     cmd = [TESSERA, "balance", os.path.abspath(a.case), "--ranks", ",".join(map(str, ranks)), "--json", bal]
+    if a.bodies:
+        cmd += ["--bodies", os.path.abspath(a.bodies)]
     for x in a.set:
         cmd += ["--set", x]
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
     b = json.load(open(bal))
+    rows = (blast_model if "partition" in b else dem_model)(a, b, runs, net)
+    print("| ranks | compute (s) | exchange (s) | predicted loop time (s) | speed-up | efficiency | measured (s) | model error |")
+    print("|---|---|---|---|---|---|---|---|")
+    t1 = rows[0]["predicted"]
+    for r in rows:
+        p, t, measured = r["ranks"], r["predicted"], r["measured"]
+        err = "-" if measured is None else f"{100 * (t - measured) / measured:+.1f} %"
+        print(f"| {p} | {r['compute']:.2f} | {r['exchange']:.2f} | {t:.2f} | {t1 / t:.2f} | {t1 / t / p:.2f} | "
+              f"{'-' if measured is None else f'{measured:.2f}'} | {err} |")
+    json.dump({"case": b["case"], "rows": rows}, open(os.path.join(a.out, "model.json"), "w"), indent=1)
+
+
+def median_loop(runs, p):
+    return statistics.median(s["loop_seconds"] for s in runs[p]) if p in runs else None
+
+
+def blast_model(a, b, runs, net):
+    """The blast's levelled step: every sub-step waits for its busiest rank, then all-gathers."""
+    t1 = median_loop(runs, 1)
+    steps = runs[1][0]["steps"]
     how, n_f = b["partition"], b["level_elements"]
 
     def c(f):
         return 1.0 if f == 0 else 2.0 ** (f - 1)
 
-    def substep_time(level_work):
-        return sum(c(f) * max(row) for f, row in enumerate(level_work))
-
-    base = substep_time(b["table"][0][how]["level_work"])
+    base = b["table"][0][how]["substep_time"]
     print(f"model: {b['case']}, partition {how}, {b['elements']} elements, {len(n_f)} levels, {steps} macro steps; "
           f"1 rank {t1:.2f} s; all-gather latency {1e6 * net['latency_s']:.1f} us, "
           f"{net['bandwidth_bytes_per_s'] / 1e9:.2f} GB/s")
-    print("| ranks | compute (s) | exchange (s) | predicted loop time (s) | speed-up | efficiency | measured (s) | model error |")
-    print("|---|---|---|---|---|---|---|---|")
-    result = []
+    rows = []
     for row in b["table"]:
         p = row["ranks"]
-        compute = t1 * substep_time(row[how]["level_work"]) / base
+        compute = t1 * row[how]["substep_time"] / base
         exchange = 0.0
         if p > 1:
             hops = math.ceil(math.log2(p))
             exchange = steps * sum(c(f) * (hops * net["latency_s"] + 112.0 * n * (p - 1) / p / net["bandwidth_bytes_per_s"])
                                    for f, n in enumerate(n_f))
-        t = compute + exchange
-        measured = statistics.median(s["loop_seconds"] for s in runs[p]) if p in runs else None
-        err = "-" if measured is None else f"{100 * (t - measured) / measured:+.1f} %"
-        print(f"| {p} | {compute:.2f} | {exchange:.2f} | {t:.2f} | {t1 / t:.2f} | {t1 / t / p:.2f} | "
-              f"{'-' if measured is None else f'{measured:.2f}'} | {err} |")
-        result.append({"ranks": p, "compute": compute, "exchange": exchange, "predicted": t, "measured": measured})
-    json.dump({"case": b["case"], "partition": how, "rows": result}, open(os.path.join(a.out, "model.json"), "w"),
-              indent=1)
+        rows.append({"ranks": p, "compute": compute, "exchange": exchange, "predicted": compute + exchange,
+                     "measured": median_loop(runs, p)})
+    return rows
+
+
+def dem_model(a, b, runs, net):
+    """A DEM step (sphere or disc bodies) on P ranks: each rank's work from its counts in
+    `tessera balance --bodies` (solid/rank_load.hpp), costed by the 1-rank run's phases, the slowest
+    rank setting the pace (every step ends in an all-reduce); then the halo's swaps and the
+    all-reduce with the latency and bandwidth of network.json."""
+    if "sendrecv_latency_s" not in net:
+        sys.exit("scaling model: network.json predates the point-to-point measurement; run `network` again")
+    one = sorted(runs[1], key=lambda s: s["loop_seconds"])[len(runs[1]) // 2]  # the median run
+    t1, steps = one["loop_seconds"], one["steps"]
+    tm = one["timers"]
+
+    def avg(*names):
+        return sum(tm[n]["avg"] for n in names if n in tm)
+
+    # Per-step work at one rank, by what it scales with.
+    contact = avg("contact_forces")
+    per_body = avg("integrate", "wall_forces")
+    per_local = avg("neighbor", "migration", "ghost_comm")  # owned and ghost bodies: list build, check
+    rest = max(0.0, t1 - contact - per_body - per_local)  # output, the moving walls' kinematics, the loop
+    # Free spheres and moving meshes (the ball, the club) are kept whole on every rank: their loads
+    # are all-gathered every step.
+    replicated = bool(one.get("free_spheres") or one.get("mesh_walls"))
+    row1 = b["table"][0]
+    cuts = "load_balanced" if a.cuts == "balanced" else "load_equal"
+    B, C = float(b["count"]), row1[cuts]["total_pairs"]
+    lat, bw, red = net["sendrecv_latency_s"], net["sendrecv_bandwidth_bytes_per_s"], net["allreduce_s"]
+    print(f"model: {b['case']}, {b['count']} bodies, {C:.0f} listed pairs (skin {b['skin']:.3g} m), {steps} steps, "
+          f"{a.cuts} cuts; 1 rank {t1:.2f} s = contacts {contact:.2f} + per body {per_body:.2f} + lists "
+          f"{per_local:.2f} + rest {rest:.2f}; swap {1e6 * lat:.2f} us + bytes / {bw / 1e9:.2f} GB/s, "
+          f"all-reduce {1e6 * red:.2f} us (2 ranks)")
+    rows = []
+    for row in b["table"]:
+        p, dims, load = row["ranks"], row["grid"], row[cuts]
+        compute = max(contact * load["pairs"][r] / C + (per_body + rest) * load["bodies"][r] / B +
+                      per_local * (load["bodies"][r] + load["ghosts"][r]) / B for r in range(p))
+        exchange = 0.0
+        if p > 1:
+            per_step = math.ceil(math.log2(p)) * red
+            if replicated:  # counts and rows of the replicated bodies' loads (ReplicatedLoads::sum)
+                per_step += 2 * math.ceil(math.log2(p)) * net["latency_s"]
+            for d in range(3):
+                if dims[d] > 1:
+                    for side in range(2):
+                        most = max(load["recv"][r][2 * d + side] for r in range(p))
+                        per_step += lat + 72.0 * most / bw  # x, v, omega per ghost
+            exchange = steps * per_step
+        rows.append({"ranks": p, "grid": dims, "compute": compute, "exchange": exchange,
+                     "predicted": compute + exchange, "measured": median_loop(runs, p),
+                     "imbalance": max(load["pairs"]) * p / sum(load["pairs"])})
+    return rows
 
 
 def main():
@@ -270,6 +374,9 @@ def main():
     p.add_argument("--measure", action="store_true", help=argparse.SUPPRESS)
     p = sub.add_parser("model")
     p.add_argument("case")
+    p.add_argument("--bodies", help="DEM scenes: the checkpoint whose bodies the ranks share")
+    p.add_argument("--cuts", choices=["equal", "balanced"], default="equal",
+                   help="DEM scenes: the cut planes the runs used (domain.cuts from `tessera balance`: balanced)")
     p.add_argument("--ranks", type=lambda s: [int(x) for x in s.split(",")], required=True)
     p.add_argument("--set", action="append", default=[])
     p.add_argument("--out", default="runs/scaling")

@@ -15,6 +15,7 @@
 #include "core/decomposition.hpp"
 #include "core/errors.hpp"
 #include "core/h5_file.hpp"
+#include "solid/rank_load.hpp"
 
 namespace tessera {
 
@@ -52,6 +53,7 @@ int blast_balance_report(const BalanceRequest& rq, const ConfigNode& root) {
       std::printf(" %7.3f %7.3f %8ld", imbalance(work), substeps, cut);
       row[partition_name(how)] = {{"imbalance", imbalance(work)},
                                   {"substep_imbalance", substeps},
+                                  {"substep_time", substep_time(level_work)},
                                   {"level_imbalance", level_imbalance(level_work)},
                                   {"level_work", level_work},
                                   {"cut_bonds", cut},
@@ -115,19 +117,31 @@ int balance_report(const BalanceRequest& rq) {
   const std::vector<double> rows = f.read_all<double>("bodies", cols);
   if (cols < 9) throw InputError("--bodies", rq.bodies_file, "a DEM checkpoint (its 'bodies' rows)");
   std::vector<WorkSample> work;
+  std::vector<Vec3> x;
+  std::vector<double> radius;
   double r_max = 0, r_min = 1e300;
   for (std::size_t i = 0; i + static_cast<std::size_t>(cols) <= rows.size(); i += static_cast<std::size_t>(cols)) {
-    work.push_back({{rows[i + 6], rows[i + 7], rows[i + 8]}, 1.0});
+    x.push_back({rows[i + 6], rows[i + 7], rows[i + 8]});
+    radius.push_back(rows[i + 3]);
+    work.push_back({x.back(), 1.0});
     r_max = std::max(r_max, rows[i + 3]), r_min = std::min(r_min, rows[i + 3]);
   }
   if (work.empty()) throw InputError("--bodies", rq.bodies_file, "a checkpoint with bodies");
   if (skin < 0) skin = 0.5 * r_min;  // DemSettings' default
   const double reach = 2 * r_max + skin;
+  // What a rank does in a step for given cuts (solid/rank_load.hpp): the scaling model's input.
+  auto load_json = [&](const RankLoad& l) {
+    return nlohmann::json{{"bodies", l.bodies}, {"pairs", l.pairs}, {"ghosts", l.ghosts}, {"recv", l.recv},
+                          {"total_pairs", l.total_pairs}, {"pair_imbalance", imbalance(l.pairs)}};
+  };
 
   nlohmann::json table = nlohmann::json::array();
   std::printf("%zu bodies in [%g %g %g] - [%g %g %g] m; slabs at least %.4g m (2 r_max + skin)%s\n", work.size(), lo.x,
               lo.y, lo.z, hi.x, hi.y, hi.z, reach, spacing.x > 0 ? ", on the fluid's cell faces" : "");
-  std::printf("%6s %10s %16s %16s   balanced cuts (x | y | z)\n", "ranks", "grid", "equal slabs", "balanced");
+  // Imbalance of the bodies (what the cuts equalise) and of the listed pairs each rank evaluates
+  // (a pair across a cut on both sides: the contact work, solid/rank_load.hpp).
+  std::printf("%6s %10s %24s %24s   balanced cuts (x | y | z)\n", "", "", "equal slabs", "balanced");
+  std::printf("%6s %10s %11s %12s %11s %12s\n", "ranks", "grid", "bodies", "pairs", "bodies", "pairs");
   for (const int p : rq.ranks) {
     const auto dims = Decomposition::choose_dims(p, hi - lo, requested);
     Vec3 min_width;
@@ -140,23 +154,29 @@ int balance_report(const BalanceRequest& rq) {
     const CutPlanes cuts = balanced_cuts(work, lo, hi, dims, min_width, spacing);
     const std::vector<double> balanced_work = rank_work(work, dims, cuts);
     const double equal = imbalance(equal_work), balanced = imbalance(balanced_work);
+    const RankLoad equal_load = dem_rank_load(x, radius, lo, hi, dims, equal_cuts(lo, hi, dims), skin);
+    const RankLoad balanced_load = dem_rank_load(x, radius, lo, hi, dims, cuts, skin);
     std::string text;
     for (int d = 0; d < 3; ++d) {
       if (d) text += " |";
       for (const double c : cuts[d]) text += " " + std::to_string(c);
     }
-    std::printf("%6d %4dx%dx%-3d %16.3f %16.3f  %s\n", p, dims[0], dims[1], dims[2], equal, balanced, text.c_str());
+    std::printf("%6d %4dx%dx%-3d %11.3f %12.3f %11.3f %12.3f  %s\n", p, dims[0], dims[1], dims[2], equal,
+                imbalance(equal_load.pairs), balanced, imbalance(balanced_load.pairs), text.c_str());
     table.push_back({{"ranks", p},
                      {"grid", dims},
                      {"imbalance_equal", equal},
                      {"imbalance_balanced", balanced},
                      {"cuts", {cuts[0], cuts[1], cuts[2]}},
                      {"bodies_per_rank_equal", equal_work},  // rank order: x fastest
-                     {"bodies_per_rank_balanced", balanced_work}});
+                     {"bodies_per_rank_balanced", balanced_work},
+                     {"load_equal", load_json(equal_load)},
+                     {"load_balanced", load_json(balanced_load)}});
   }
   if (!rq.json_out.empty()) {
     std::ofstream out(rq.json_out);
-    out << nlohmann::json{{"case", rq.case_file}, {"bodies", rq.bodies_file}, {"count", work.size()}, {"table", table}}
+    out << nlohmann::json{{"case", rq.case_file}, {"bodies", rq.bodies_file}, {"count", work.size()},
+                          {"skin", skin},     {"r_max", r_max},           {"table", table}}
                .dump(2)
         << "\n";
   }

@@ -67,6 +67,15 @@ TEST(Cli, BalanceReportsTheImbalanceOfACheckpoint) {
   EXPECT_EQ(grid, (std::vector<int>{1, 1, 4}));
   EXPECT_NEAR(table[1]["imbalance_equal"].get<double>(), 1.063, 0.02) << r.output;
   EXPECT_LT(table[1]["imbalance_balanced"].get<double>(), 1.01) << r.output;
+  // The scaling model's counts (solid/rank_load.hpp, checked against real ranks in test_rank_load):
+  // one rank evaluates every listed pair once and holds no ghosts; four count the cut's pairs twice.
+  const auto& one = table[0]["load_balanced"];
+  EXPECT_GT(one["total_pairs"].get<double>(), 9720);
+  EXPECT_EQ(one["pairs"][0].get<double>(), one["total_pairs"].get<double>());
+  EXPECT_EQ(one["ghosts"][0].get<double>(), 0.0);
+  double four = 0;
+  for (const auto& n : table[1]["load_balanced"]["pairs"]) four += n.get<double>();
+  EXPECT_GT(four, one["total_pairs"].get<double>());
   r = run("balance " + case_file + " --bodies " + (out / "checkpoint.h5").string() + " --ranks four");
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("--ranks"), std::string::npos) << r.output;
@@ -93,6 +102,7 @@ TEST(Cli, BalanceReportsABlastCasesPartitions) {
   for (const char* how : {"slabs", "balanced", "metis"}) {
     EXPECT_DOUBLE_EQ(table[0][how]["imbalance"].get<double>(), 1.0) << how;
     EXPECT_DOUBLE_EQ(table[0][how]["substep_imbalance"].get<double>(), 1.0) << how;
+    EXPECT_GT(table[0][how]["substep_time"].get<double>(), 0.0) << how;  // tools/scaling.py model reads it
     EXPECT_EQ(table[0][how]["cut_bonds"].get<long>(), 0) << how;
     EXPECT_EQ(table[2][how]["work_per_rank"].size(), 16u) << how;
     EXPECT_GE(table[1][how]["level_imbalance"].size(), 2u) << how;

@@ -1,0 +1,104 @@
+// SPDX-License-Identifier: MIT
+#include "solid/rank_load.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <unordered_map>
+
+namespace tessera {
+
+namespace {
+
+// Every pair closer than r_a + r_b + skin, found on a uniform grid of cells 2 r_max + skin wide.
+template <class F>
+void for_each_listed_pair(const std::vector<Vec3>& x, const std::vector<double>& radius, double skin, F&& f) {
+  if (x.empty()) return;
+  const double r_max = *std::max_element(radius.begin(), radius.end());
+  const double h = 2 * r_max + skin;
+  Vec3 lo = x[0];
+  for (const Vec3& p : x)
+    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], p[d]);
+  auto cell = [&](const Vec3& p, int d) { return static_cast<std::int64_t>(std::floor((p[d] - lo[d]) / h)); };
+  auto key = [](std::int64_t i, std::int64_t j, std::int64_t k) { return (i << 42) ^ (j << 21) ^ k; };
+  std::unordered_map<std::int64_t, std::vector<std::size_t>> cells;
+  for (std::size_t a = 0; a < x.size(); ++a) cells[key(cell(x[a], 0), cell(x[a], 1), cell(x[a], 2))].push_back(a);
+  for (std::size_t a = 0; a < x.size(); ++a) {
+    const std::int64_t ci = cell(x[a], 0), cj = cell(x[a], 1), ck = cell(x[a], 2);
+    for (std::int64_t i = ci - 1; i <= ci + 1; ++i)
+      for (std::int64_t j = cj - 1; j <= cj + 1; ++j)
+        for (std::int64_t k = ck - 1; k <= ck + 1; ++k) {
+          const auto it = cells.find(key(i, j, k));
+          if (it == cells.end()) continue;
+          for (const std::size_t b : it->second) {
+            if (b <= a) continue;
+            const Vec3 d = x[b] - x[a];
+            const double cut = radius[a] + radius[b] + skin;
+            if (dot(d, d) < cut * cut) f(a, b);
+          }
+        }
+  }
+}
+
+}  // namespace
+
+RankLoad dem_rank_load(const std::vector<Vec3>& x, const std::vector<double>& radius, const Vec3& lo, const Vec3& hi,
+                       std::array<int, 3> dims, const CutPlanes& interior, double skin) {
+  const std::size_t ranks = static_cast<std::size_t>(dims[0]) * dims[1] * dims[2];
+  RankLoad load;
+  load.bodies.assign(ranks, 0.0);
+  load.pairs.assign(ranks, 0.0);
+  load.ghosts.assign(ranks, 0.0);
+  load.recv.assign(ranks, {});
+  if (x.empty()) return load;
+  std::array<std::vector<double>, 3> planes;  // dims[d] + 1 planes per direction
+  for (int d = 0; d < 3; ++d) {
+    planes[d].push_back(lo[d]);
+    for (const double c : interior[d]) planes[d].push_back(c);
+    planes[d].push_back(hi[d]);
+  }
+  auto rank_of = [&](const std::array<int, 3>& c) {
+    return static_cast<std::size_t>(c[0] + dims[0] * (c[1] + dims[1] * c[2]));
+  };
+  const double r_max = *std::max_element(radius.begin(), radius.end());
+  std::vector<std::size_t> owner(x.size());
+  for (std::size_t a = 0; a < x.size(); ++a) {
+    std::array<int, 3> c{};
+    const int g = grid_cell(x[a], dims, interior);
+    c[0] = g % dims[0], c[1] = (g / dims[0]) % dims[1], c[2] = g / (dims[0] * dims[1]);
+    owner[a] = static_cast<std::size_t>(g);
+    load.bodies[owner[a]] += 1;
+    // Ghosts: per direction, the slab itself or a neighbour across a face within the reach; every
+    // combination but the body's own cell is a rank holding a copy.
+    const double reach = radius[a] + r_max + skin;
+    std::array<std::vector<int>, 3> options;
+    for (int d = 0; d < 3; ++d) {
+      options[d].push_back(c[d]);
+      if (c[d] > 0 && x[a][d] - planes[d][static_cast<std::size_t>(c[d])] < reach) options[d].push_back(c[d] - 1);
+      if (c[d] + 1 < dims[d] && planes[d][static_cast<std::size_t>(c[d]) + 1] - x[a][d] < reach)
+        options[d].push_back(c[d] + 1);
+    }
+    for (const int i : options[0])
+      for (const int j : options[1])
+        for (const int k : options[2]) {
+          const std::array<int, 3> t{i, j, k};
+          if (t == c) continue;
+          const std::size_t r = rank_of(t);
+          load.ghosts[r] += 1;
+          // It arrives in the last direction in which it moves (x, then y, then z).
+          for (int d = 2; d >= 0; --d)
+            if (t[d] != c[d]) {
+              load.recv[r][static_cast<std::size_t>(2 * d + (t[d] < c[d] ? 1 : 0))] += 1;
+              break;
+            }
+        }
+  }
+  for_each_listed_pair(x, radius, skin, [&](std::size_t a, std::size_t b) {
+    load.total_pairs += 1;
+    load.pairs[owner[a]] += 1;
+    if (owner[b] != owner[a]) load.pairs[owner[b]] += 1;
+  });
+  return load;
+}
+
+}  // namespace tessera

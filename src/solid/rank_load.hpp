@@ -1,0 +1,34 @@
+// SPDX-License-Identifier: MIT
+// What each rank of a Cartesian process grid would do in a DEM step, counted on one process from
+// the bodies' positions (issue 19: the scaling model's per-rank work, without running P ranks).
+//
+// The counts follow the ownership rule of halo.hpp: a rank owns the bodies whose centres its
+// sub-box holds; it evaluates every listed pair with at least one owned body (a pair across a cut is
+// evaluated on both sides); its ghosts are the bodies within r + r_max + skin of a face, swept x,
+// y, z with forwarding, so a ghost crosses at most one face per direction (slabs are at least the
+// reach wide). A pair is listed when the centres are closer than r_a + r_b + skin (neighbor_list).
+#pragma once
+#include <array>
+#include <vector>
+
+#include "core/balance.hpp"
+#include "core/vec3.hpp"
+
+namespace tessera {
+
+struct RankLoad {
+  std::vector<double> bodies;  // owned bodies per rank (rank order: x fastest)
+  std::vector<double> pairs;   // listed pairs each rank evaluates
+  std::vector<double> ghosts;  // ghost copies each rank holds
+  // Ghosts each rank receives in each of the six swaps (direction d, from the low / high side):
+  // recv[rank][2 d + side]. A swap moves them every step (x, v, omega).
+  std::vector<std::array<double, 6>> recv;
+  double total_pairs = 0;  // distinct listed pairs
+};
+
+// x: body centres, radius: their radii; dims and interior cuts as Decomposition's; skin the
+// neighbour list's.
+RankLoad dem_rank_load(const std::vector<Vec3>& x, const std::vector<double>& radius, const Vec3& lo, const Vec3& hi,
+                       std::array<int, 3> dims, const CutPlanes& interior, double skin);
+
+}  // namespace tessera
