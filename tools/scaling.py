@@ -306,12 +306,12 @@ def dem_model(a, b, runs, net):
     all-reduce with the latency and bandwidth of network.json."""
     if "sendrecv_latency_s" not in net:
         sys.exit("scaling model: network.json predates the point-to-point measurement; run `network` again")
-    one = sorted(runs[1], key=lambda s: s["loop_seconds"])[len(runs[1]) // 2]  # the median run
-    t1, steps = one["loop_seconds"], one["steps"]
-    tm = one["timers"]
+    one = runs[1][0]
+    t1, steps = median_loop(runs, 1), one["steps"]
 
-    def avg(*names):
-        return sum(tm[n]["avg"] for n in names if n in tm)
+    def avg(*names):  # the phases' shares of the loop, averaged over the 1-rank runs, times the median
+        return t1 * statistics.mean(sum(s["timers"][n]["avg"] for n in names if n in s["timers"]) / s["loop_seconds"]
+                                    for s in runs[1])
 
     # Per-step work at one rank, by what it scales with.
     contact = avg("contact_forces")

@@ -129,6 +129,9 @@ int balance_report(const BalanceRequest& rq) {
   if (work.empty()) throw InputError("--bodies", rq.bodies_file, "a checkpoint with bodies");
   if (skin < 0) skin = 0.5 * r_min;  // DemSettings' default
   const double reach = 2 * r_max + skin;
+  // The work a run's balance counts (DemSolver::work): 1 plus the listed pairs of each body.
+  const std::vector<double> pairs_of = listed_pairs_per_body(x, radius, skin);
+  for (std::size_t i = 0; i < work.size(); ++i) work[i].weight = 1 + pairs_of[i];
   // What a rank does in a step for given cuts (solid/rank_load.hpp): the scaling model's input.
   auto load_json = [&](const RankLoad& l) {
     return nlohmann::json{{"bodies", l.bodies}, {"pairs", l.pairs}, {"ghosts", l.ghosts}, {"recv", l.recv},
@@ -138,10 +141,11 @@ int balance_report(const BalanceRequest& rq) {
   nlohmann::json table = nlohmann::json::array();
   std::printf("%zu bodies in [%g %g %g] - [%g %g %g] m; slabs at least %.4g m (2 r_max + skin)%s\n", work.size(), lo.x,
               lo.y, lo.z, hi.x, hi.y, hi.z, reach, spacing.x > 0 ? ", on the fluid's cell faces" : "");
-  // Imbalance of the bodies (what the cuts equalise) and of the listed pairs each rank evaluates
-  // (a pair across a cut on both sides: the contact work, solid/rank_load.hpp).
+  // Imbalance of the work the cuts equalise (1 + listed pairs per body, as a run's balance counts)
+  // and of the listed pairs each rank evaluates (a pair across a cut on both sides: the contact
+  // work, solid/rank_load.hpp).
   std::printf("%6s %10s %24s %24s   balanced cuts (x | y | z)\n", "", "", "equal slabs", "balanced");
-  std::printf("%6s %10s %11s %12s %11s %12s\n", "ranks", "grid", "bodies", "pairs", "bodies", "pairs");
+  std::printf("%6s %10s %11s %12s %11s %12s\n", "ranks", "grid", "work", "pairs", "work", "pairs");
   for (const int p : rq.ranks) {
     const auto dims = Decomposition::choose_dims(p, hi - lo, requested);
     Vec3 min_width;
@@ -168,8 +172,8 @@ int balance_report(const BalanceRequest& rq) {
                      {"imbalance_equal", equal},
                      {"imbalance_balanced", balanced},
                      {"cuts", {cuts[0], cuts[1], cuts[2]}},
-                     {"bodies_per_rank_equal", equal_work},  // rank order: x fastest
-                     {"bodies_per_rank_balanced", balanced_work},
+                     {"work_per_rank_equal", equal_work},  // rank order: x fastest; work = 1 + listed pairs per body
+                     {"work_per_rank_balanced", balanced_work},
                      {"load_equal", load_json(equal_load)},
                      {"load_balanced", load_json(balanced_load)}});
   }

@@ -42,6 +42,12 @@ void for_each_listed_pair(const std::vector<Vec3>& x, const std::vector<double>&
 
 }  // namespace
 
+std::vector<double> listed_pairs_per_body(const std::vector<Vec3>& x, const std::vector<double>& radius, double skin) {
+  std::vector<double> n(x.size(), 0.0);
+  for_each_listed_pair(x, radius, skin, [&](std::size_t a, std::size_t b) { n[a] += 1, n[b] += 1; });
+  return n;
+}
+
 RankLoad dem_rank_load(const std::vector<Vec3>& x, const std::vector<double>& radius, const Vec3& lo, const Vec3& hi,
                        std::array<int, 3> dims, const CutPlanes& interior, double skin) {
   const std::size_t ranks = static_cast<std::size_t>(dims[0]) * dims[1] * dims[2];

@@ -26,6 +26,10 @@ struct RankLoad {
   double total_pairs = 0;  // distinct listed pairs
 };
 
+// Each body's listed pairs (the pairs it takes part in): 1 plus this is the work per body that a
+// run's load balance counts (DemSolver::work).
+std::vector<double> listed_pairs_per_body(const std::vector<Vec3>& x, const std::vector<double>& radius, double skin);
+
 // x: body centres, radius: their radii; dims and interior cuts as Decomposition's; skin the
 // neighbour list's.
 RankLoad dem_rank_load(const std::vector<Vec3>& x, const std::vector<double>& radius, const Vec3& lo, const Vec3& hi,
