@@ -31,7 +31,8 @@ the bodies, and the list build and check times its share of owned plus ghost bod
 (solid/rank_load.hpp, counted from the checkpoint for the cuts a run on P ranks has). Then per
 step each of the halo's swaps (two per split direction) at the sendrecv latency plus the busiest
 receiver's ghosts x 72 bytes over the bandwidth, and ceil(log2 P) all-reduces (and, with free
-spheres or moving meshes, two all-gathers of their loads at the all-gather's latency). The work is taken
+spheres or moving meshes, ceil(log2 P) more for their loads, 6 exact sums of 69 integers each). The
+work is taken
 where the checkpoint has it: a scene whose work moves (a deposition) is outside the model.
 
 The time of a run is its loop_seconds (the time-step loop, as LAMMPS' Loop time: set-up and the
@@ -320,7 +321,7 @@ def dem_model(a, b, runs, net):
     rest = max(0.0, t1 - contact - per_body - per_local)  # output, the moving walls' kinematics, the loop
     # Free spheres and moving meshes (the ball, the club) are kept whole on every rank: their loads
     # are all-gathered every step.
-    replicated = bool(one.get("free_spheres") or one.get("mesh_walls"))
+    replicated = len(one.get("free_spheres", [])) + len(one.get("mesh_walls", []))  # loads summed every step
     row1 = b["table"][0]
     cuts = "load_balanced" if a.cuts == "balanced" else "load_equal"
     B, C = float(b["count"]), row1[cuts]["total_pairs"]
@@ -337,8 +338,8 @@ def dem_model(a, b, runs, net):
         exchange = 0.0
         if p > 1:
             per_step = math.ceil(math.log2(p)) * red
-            if replicated:  # counts and rows of the replicated bodies' loads (ReplicatedLoads::sum)
-                per_step += 2 * math.ceil(math.log2(p)) * net["latency_s"]
+            if replicated:  # the replicated bodies' loads: one all-reduce of exact sums (ReplicatedLoads::sum)
+                per_step += math.ceil(math.log2(p)) * (red + replicated * 6 * 69 * 8 / bw)
             for d in range(3):
                 if dims[d] > 1:
                     for side in range(2):

@@ -90,19 +90,25 @@ double ExactSum::value() const {
 }
 
 void ExactSum::all_reduce(std::span<ExactSum> sums, MPI_Comm comm) {
-  std::vector<std::int64_t> digits(sums.size() * kDigits);
-  std::vector<double> nonfinite(sums.size());
+  // One message: the digits, and a count of the sums holding a non-finite term; those terms travel
+  // in a second message only when some rank has one.
+  const std::size_t n = sums.size() * kDigits;
+  std::vector<std::int64_t> digits(n + 1, 0);
   for (std::size_t i = 0; i < sums.size(); ++i) {
     sums[i].normalise();
     for (int k = 0; k < kDigits; ++k) digits[i * kDigits + k] = sums[i].digits_[k];
-    nonfinite[i] = sums[i].nonfinite_;
+    if (sums[i].nonfinite_ != 0.0 || std::isnan(sums[i].nonfinite_)) ++digits[n];
   }
   // Normalised digits are below 2^32: a sum over up to 2^30 ranks cannot overflow.
   MPI_Allreduce(MPI_IN_PLACE, digits.data(), static_cast<int>(digits.size()), MPI_INT64_T, MPI_SUM, comm);
-  MPI_Allreduce(MPI_IN_PLACE, nonfinite.data(), static_cast<int>(nonfinite.size()), MPI_DOUBLE, MPI_SUM, comm);
+  if (digits[n] > 0) {
+    std::vector<double> nonfinite(sums.size());
+    for (std::size_t i = 0; i < sums.size(); ++i) nonfinite[i] = sums[i].nonfinite_;
+    MPI_Allreduce(MPI_IN_PLACE, nonfinite.data(), static_cast<int>(nonfinite.size()), MPI_DOUBLE, MPI_SUM, comm);
+    for (std::size_t i = 0; i < sums.size(); ++i) sums[i].nonfinite_ = nonfinite[i];
+  }
   for (std::size_t i = 0; i < sums.size(); ++i) {
     for (int k = 0; k < kDigits; ++k) sums[i].digits_[k] = digits[i * kDigits + k];
-    sums[i].nonfinite_ = nonfinite[i];
     sums[i].normalise();
   }
 }

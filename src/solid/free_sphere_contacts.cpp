@@ -57,7 +57,7 @@ void FreeSphereContacts::grain_forces(ContactEntities& entities, ContactLanes& L
       grain_hist_next_[keys[j]] = {L.hx[j], L.hy[j], L.hz[j]};
       entities.add_wall_reaction(entity[j], L, j);
       const double rb = L.rb[j];
-      loads.add(keys[j], mesh_count + static_cast<std::size_t>(sphere[j]), Vec3{-L.fx[j], -L.fy[j], -L.fz[j]},
+      loads.add(mesh_count + static_cast<std::size_t>(sphere[j]), Vec3{-L.fx[j], -L.fy[j], -L.fz[j]},
                 Vec3{-L.nx[j] * rb, -L.ny[j] * rb, -L.nz[j] * rb});
     }
     nb = 0;

@@ -135,7 +135,7 @@ void MeshWallContacts::forces(ContactEntities& entities, std::vector<MeshWall>& 
       entities.add_wall_reaction(e, L, j);
       const Vec3 f{L.fx[j], L.fy[j], L.fz[j]};
       const Vec3 moment = cross(points[j] - m.origin, f);
-      loads.add(keys[j], static_cast<std::size_t>(mesh_of_[k]), -f, -moment);
+      loads.add(static_cast<std::size_t>(mesh_of_[k]), -f, -moment);
     }
   }
   if (dt > 0) hist_.swap(hist_next_);

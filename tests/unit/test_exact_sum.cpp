@@ -106,4 +106,23 @@ TEST(ExactSum, AllReduceIndependentOfRankCount) {
   EXPECT_EQ(parts[1].value(), -2.0 * serial.value());
 }
 
+// The non-finite terms travel only when some rank has one (a second message): an infinity on the
+// last rank alone reaches every rank's sum, and the finite sums beside it stay exact.
+TEST(ExactSum, AllReduceCarriesANonFiniteTermFromOneRank) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  ExactSum parts[2];
+  parts[0] += 1.0;
+  parts[1] += 0.5;
+  if (rank == size - 1) parts[0] += -std::numeric_limits<double>::infinity();
+  ExactSum::all_reduce(parts, MPI_COMM_WORLD);
+  EXPECT_EQ(parts[0].value(), -std::numeric_limits<double>::infinity());
+  EXPECT_EQ(parts[1].value(), 0.5 * size);
+  ExactSum finite[1];
+  finite[0] += 0.25;
+  ExactSum::all_reduce(finite, MPI_COMM_WORLD);
+  EXPECT_EQ(finite[0].value(), 0.25 * size);
+}
+
 }  // namespace
