@@ -10,7 +10,7 @@ each run's summary.json into speed-up, parallel efficiency and the time per phas
   tools/scaling.py network --out D          (mpirun -n 2; needs python3-mpi4py) this machine's MPI costs,
         t = latency + bytes / bandwidth fitted over 8 B - 1 MB for the all-gather and for the halo's
         MPI_Sendrecv, and a two-double all-reduce, in D/network.json
-  tools/scaling.py model CASE.yaml --ranks 2,4,16,64 --out D [--bodies CHECKPOINT] [--cuts balanced] [--set ...]
+  tools/scaling.py model CASE.yaml --ranks 2,4,16,64 --out D [--bodies CHECKPOINT] [--cuts balanced] [--png F] [--set ...]
         predicts the loop time on P ranks from D's 1-rank runs, the work per rank that `tessera balance`
         counts for P on one process, and D/network.json; where D holds measured runs on P ranks it
         prints the model's error. The blast (its levelled step), or a DEM scene of spheres or discs
@@ -267,6 +267,38 @@ def model(a):
         print(f"| {p} | {r['compute']:.2f} | {r['exchange']:.2f} | {t:.2f} | {t1 / t:.2f} | {t1 / t / p:.2f} | "
               f"{'-' if measured is None else f'{measured:.2f}'} | {err} |")
     json.dump({"case": b["case"], "rows": rows}, open(os.path.join(a.out, "model.json"), "w"), indent=1)
+    if a.png:
+        plot_model(a, rows)
+
+
+def plot_model(a, rows):
+    """Predicted speed-up and the time per step's compute and exchange, with the measured points."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    ps = [r["ranks"] for r in rows]
+    t1 = rows[0]["predicted"]
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4))
+    ax[0].loglog(ps, [t1 / r["predicted"] for r in rows], "o-", label="predicted")
+    measured = [(r["ranks"], t1 / r["measured"]) for r in rows if r["measured"]]
+    if measured:
+        ax[0].loglog(*zip(*measured), "s", ms=9, mfc="none", label="measured (median)")
+    ax[0].loglog(ps, ps, "k--", lw=0.8, label="ideal")
+    ax[0].set_xlabel("ranks"), ax[0].set_ylabel("speed-up against 1 rank"), ax[0].legend()
+    labels = [str(p) for p in ps]
+    # Core-seconds (P x loop time): flat when the scaling is ideal.
+    ax[1].bar(labels, [p * r["compute"] for p, r in zip(ps, rows)], label="compute (busiest rank)")
+    ax[1].bar(labels, [p * r["exchange"] for p, r in zip(ps, rows)], bottom=[p * r["compute"] for p, r in zip(ps, rows)],
+              label="exchange")
+    if measured:
+        ax[1].plot([labels[ps.index(p)] for p, _ in measured], [p * t1 / s for p, s in measured], "s", ms=9,
+                   mfc="none", label="measured (median)")
+    ax[1].set_xlabel("ranks"), ax[1].set_ylabel("ranks x predicted loop time (core-s)")
+    ax[1].legend(fontsize=8)
+    fig.suptitle(f"scaling model: {os.path.basename(a.case)} ({a.out})")
+    fig.tight_layout()
+    fig.savefig(a.png, dpi=110)
+    print(f"wrote {a.png}")
 
 
 def median_loop(runs, p):
@@ -376,6 +408,7 @@ def main():
     p = sub.add_parser("model")
     p.add_argument("case")
     p.add_argument("--bodies", help="DEM scenes: the checkpoint whose bodies the ranks share")
+    p.add_argument("--png", help="draw the predicted speed-up and time (with the measured points) here")
     p.add_argument("--cuts", choices=["equal", "balanced"], default="equal",
                    help="DEM scenes: the cut planes the runs used (domain.cuts from `tessera balance`: balanced)")
     p.add_argument("--ranks", type=lambda s: [int(x) for x in s.split(",")], required=True)
