@@ -93,7 +93,8 @@ void ExactSum::all_reduce(std::span<ExactSum> sums, MPI_Comm comm) {
   // One message: the digits, and a count of the sums holding a non-finite term; those terms travel
   // in a second message only when some rank has one.
   const std::size_t n = sums.size() * kDigits;
-  std::vector<std::int64_t> digits(n + 1, 0);
+  thread_local std::vector<std::int64_t> digits;  // kept: the DEM sums its replicated loads every step
+  digits.assign(n + 1, 0);
   for (std::size_t i = 0; i < sums.size(); ++i) {
     sums[i].normalise();
     for (int k = 0; k < kDigits; ++k) digits[i * kDigits + k] = sums[i].digits_[k];
