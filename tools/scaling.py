@@ -178,6 +178,10 @@ def report(a):
 def network(a):
     """The all-gather's cost between 2 ranks: run under mpirun by itself (`network --measure`)."""
     if not a.measure:
+        try:
+            import mpi4py  # noqa: F401
+        except ImportError:
+            sys.exit("scaling network: needs mpi4py (apt-get install python3-mpi4py)")
         os.makedirs(a.out, exist_ok=True)
         env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                    OMPI_MCA_rmaps_base_oversubscribe="1")
