@@ -2,42 +2,35 @@
 #include "solid/rank_load.hpp"
 
 #include <algorithm>
-#include <cmath>
 #include <cstdint>
-#include <unordered_map>
+
+#include "solid/neighbor_list.hpp"
 
 namespace tessera {
 
 namespace {
 
-// Every pair closer than r_a + r_b + skin, found on a uniform grid of cells 2 r_max + skin wide.
+// Every pair the run's neighbour list would list (closer than r_a + r_b + skin): the list itself,
+// built over all bodies as if one rank owned them.
 template <class F>
 void for_each_listed_pair(const std::vector<Vec3>& x, const std::vector<double>& radius, double skin, F&& f) {
   if (x.empty()) return;
-  const double r_max = *std::max_element(radius.begin(), radius.end());
-  const double h = 2 * r_max + skin;
-  Vec3 lo = x[0];
-  for (const Vec3& p : x)
-    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], p[d]);
-  auto cell = [&](const Vec3& p, int d) { return static_cast<std::int64_t>(std::floor((p[d] - lo[d]) / h)); };
-  auto key = [](std::int64_t i, std::int64_t j, std::int64_t k) { return (i << 42) ^ (j << 21) ^ k; };
-  std::unordered_map<std::int64_t, std::vector<std::size_t>> cells;
-  for (std::size_t a = 0; a < x.size(); ++a) cells[key(cell(x[a], 0), cell(x[a], 1), cell(x[a], 2))].push_back(a);
+  std::vector<double> flat(3 * x.size()), mass(x.size(), 1.0);
+  std::vector<std::int64_t> key(x.size());
   for (std::size_t a = 0; a < x.size(); ++a) {
-    const std::int64_t ci = cell(x[a], 0), cj = cell(x[a], 1), ck = cell(x[a], 2);
-    for (std::int64_t i = ci - 1; i <= ci + 1; ++i)
-      for (std::int64_t j = cj - 1; j <= cj + 1; ++j)
-        for (std::int64_t k = ck - 1; k <= ck + 1; ++k) {
-          const auto it = cells.find(key(i, j, k));
-          if (it == cells.end()) continue;
-          for (const std::size_t b : it->second) {
-            if (b <= a) continue;
-            const Vec3 d = x[b] - x[a];
-            const double cut = radius[a] + radius[b] + skin;
-            if (dot(d, d) < cut * cut) f(a, b);
-          }
-        }
+    for (int d = 0; d < 3; ++d) flat[3 * a + static_cast<std::size_t>(d)] = x[a][d];
+    key[a] = static_cast<std::int64_t>(a);
   }
+  ContactElements e;
+  e.size = e.owned = x.size();
+  e.x = flat.data();
+  e.radius = radius.data();
+  e.key = key.data();
+  e.body_mass = mass.data();
+  NeighborList list;
+  list.build(e, skin, {});
+  for (std::size_t k = 0; k < list.size(); ++k)
+    f(static_cast<std::size_t>(list.first[k]), static_cast<std::size_t>(list.second[k]));
 }
 
 }  // namespace
