@@ -23,6 +23,12 @@ tools/bunker_stiffness.py measures it). One entry of the seed's Table 3 is known
       the club gains speed) and prints the value that reaches --target-speed, the standard error
       of that value (the fit's covariance, to first order), and the angle the same kind of fit
       predicts there. D/scan_<KEY>.csv, .md and .png.
+  tools/bunker_calibrate.py scan --parameter KEY --values a,b,c --reference b [same options]
+      a convergence study instead of a calibration (e.g. KEY solid.steps_per_contact): each value's
+      means and medians, their relative change from the reference value's ensemble +- the change's
+      standard error, and the verdict of tools/bunker_stiffness.py (within 2 %: "yes" by two
+      standard errors, "no" outside by two, else "likely" / "unlikely"); no fit.
+      D/converge_<KEY>.csv, .md and .png.
 """
 import argparse
 import csv
@@ -34,7 +40,7 @@ import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "bench"))
 from benchlib import ENV, ROOT, TESSERA  # noqa: E402
-from bunker_stiffness import ensemble_stats  # noqa: E402
+from bunker_stiffness import ensemble_stats, verdict  # noqa: E402
 
 TARGET_ANGLE, TARGET_SPEED = 52.5, 15.9  # the seed's Table 3 at loft 58, bounce 10, depth 0 (issue 20)
 
@@ -209,6 +215,8 @@ def scan(args):
         rows.append(r)
         print("%s = %-8g angle %s deg  speed %s m/s  club loses %s rad/s (%d shots)" % (
             key, v, fmt(r["angle"], "%.2f"), fmt(r["speed"], "%.3f"), fmt(r["loss"], "%.1f"), r["shots"]), flush=True)
+    if args.reference is not None:
+        return converge(args, rows)
     import numpy as np
     x = [r["value"] for r in rows]
     fits = {q: fit(x, [r[q]["mean"] for r in rows], [r[q]["mean_stderr"] for r in rows]) for q in ("speed", "angle")}
@@ -253,6 +261,78 @@ def scan(args):
     fig.tight_layout()
     fig.savefig(os.path.join(args.out, "scan_%s.png" % tag), dpi=120)
 
+def relative_change(r, base, q, stat):
+    """(change, its standard error) of r's mean or median of q relative to base's."""
+    a, b = r[q][stat], base[q][stat]
+    ea, eb = r[q][stat + "_stderr"], base[q][stat + "_stderr"]
+    if r is base:
+        return 0.0, 0.0
+    return a / b - 1.0, ((ea / b) ** 2 + (a * eb / b ** 2) ** 2) ** 0.5
+
+
+def converge(args, rows):
+    """The scan's ensembles against the --reference value's: relative changes and verdicts."""
+    key = args.parameter
+    base = [r for r in rows if r["value"] == args.reference]
+    if not base:
+        sys.exit("bunker calibrate: --reference %g is not among --values" % args.reference)
+    base = base[0]
+    md = ["| %s | shots | wall per shot (s) | angle, mean (deg) | change | speed, mean (m/s) | change | within 2 %% "
+          "(means) | angle, median | change | speed, median | change | within 2 %% (medians) | club loses (rad/s) |"
+          % key, "|---" * 14 + "|"]
+    out = []
+    for r in rows:
+        cells, verdicts = {}, {}
+        for stat in ("mean", "median"):
+            worst = []
+            for q in ("angle", "speed"):
+                c, e = relative_change(r, base, q, stat)
+                cells[q, stat] = "" if r is base else "%+.1f +- %.1f %%" % (100 * c, 100 * e)
+                worst.append(verdict(c, e))
+            order = ["yes", "likely", "unlikely", "no"]
+            verdicts[stat] = "reference" if r is base else max(worst, key=order.index)
+        f2 = lambda q, stat: "%.2f +- %.2f" % (r[q][stat], r[q][stat + "_stderr"])
+        f3 = lambda q, stat: "%.3f +- %.3f" % (r[q][stat], r[q][stat + "_stderr"])
+        md.append("| %g | %d | %.1f | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
+            r["value"], r["shots"], r["wall_s"], f2("angle", "mean"), cells["angle", "mean"], f3("speed", "mean"),
+            cells["speed", "mean"], verdicts["mean"], f2("angle", "median"), cells["angle", "median"],
+            f3("speed", "median"), cells["speed", "median"], verdicts["median"], fmt(r["loss"], "%.1f")))
+        out.append([r["value"], r["shots"], r["wall_s"], r["angle"]["mean"], r["angle"]["mean_stderr"],
+                    r["speed"]["mean"], r["speed"]["mean_stderr"], r["angle"]["median"], r["angle"]["median_stderr"],
+                    r["speed"]["median"], r["speed"]["median_stderr"], r["speed"]["sd"], r["loss"]["mean"],
+                    verdicts["mean"], verdicts["median"]])
+    md.append("")
+    md.append("%d shots per value (shot m m x %g um deeper); +- one standard error (the median's by a bootstrap); "
+              "changes relative to %s = %g." % (args.ensemble, 1e6 * args.perturbation, key, args.reference))
+    tag = key.replace(".", "_")
+    open(os.path.join(args.out, "converge_%s.md" % tag), "w").write("\n".join(md) + "\n")
+    with open(os.path.join(args.out, "converge_%s.csv" % tag), "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow([key, "shots", "wall_s", "angle_mean", "angle_stderr", "speed_mean", "speed_stderr",
+                    "angle_median", "angle_median_stderr", "speed_median", "speed_median_stderr", "speed_sd",
+                    "club_loss_mean", "verdict_means", "verdict_medians"])
+        w.writerows(out)
+    print("\n".join(md))
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(1, 2, figsize=(9, 3.6))
+    x = [r["value"] for r in rows]
+    for ax, q, label in ((axes[0], "speed", "release speed (m/s)"), (axes[1], "angle", "release angle (deg)")):
+        for stat, fmt_, dx in (("mean", "o", -0.02), ("median", "s", 0.02)):
+            ax.errorbar([v * (1 + dx) for v in x], [r[q][stat] for r in rows],
+                        yerr=[2 * r[q][stat + "_stderr"] for r in rows], fmt=fmt_, capsize=3,
+                        label="%s +- 2 s.e. (%d shots)" % (stat, args.ensemble))
+        b = base[q]["median"]
+        ax.axhspan(0.98 * b, 1.02 * b, color="0.85", label="reference median +- 2 %")
+        ax.set_xscale("log")
+        ax.set_xlabel(key)
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(args.out, "converge_%s.png" % tag), dpi=120)
+
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -266,6 +346,8 @@ def main():
     ap.add_argument("--parameter", default="club.mass_scale")
     ap.add_argument("--values", default="1,2,4")
     ap.add_argument("--target-speed", type=float, default=TARGET_SPEED)
+    ap.add_argument("--reference", type=float, default=None,
+                    help="a convergence study: changes from this value's ensemble, no fit")
     ap.add_argument("--set", action="append", default=[])
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)

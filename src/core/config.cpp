@@ -302,11 +302,15 @@ std::vector<ConfigNode> ConfigNode::list(const std::string& key) const {
   const YAML::Node n = child(key);
   if (!n.IsDefined() || n.IsNull()) return items;
   if (!n.IsSequence()) throw InputError(key_path(key), show(n), "a list of sections");
+  // A sequence in the resolved case (indexing a null node would make a mapping with keys 0, 1, ...,
+  // which no case reads back).
+  if (!out_[key].IsSequence()) out_[key] = YAML::Node(YAML::NodeType::Sequence);
   YAML::Node o = out_[key];
   for (std::size_t i = 0; i < n.size(); ++i) {
     const std::string p = key_path(key) + "." + std::to_string(i);
     if (!n[i].IsMap()) throw InputError(p, show(n[i]), "a section (a mapping of keys)");
     state_->used.insert(p);
+    while (o.size() <= i) o.push_back(YAML::Node(YAML::NodeType::Map));
     items.emplace_back(state_, n[i], o[i], p);
   }
   return items;

@@ -77,6 +77,33 @@ TEST(Config, ResolvedCaseHoldsListsOfIntegersAndNames) {
   EXPECT_EQ(r["names"][1].as<std::string>(), "wall");
 }
 
+// A list of sections stays a list (it once came out as a mapping with keys 0, 1, which the next
+// run refused), and the resolved case read again resolves to the same text.
+TEST(Config, ResolvedCaseHoldsListsOfSectionsAndReadsBack) {
+  auto read = [](Config& c) {
+    for (const ConfigNode& p : c.root().section("a").list("pairs")) {
+      p.texts("materials");
+      p.real("k", Dim::none, Range::positive());
+      p.real("e", Dim::none, Range::positive(), 0.5);
+    }
+  };
+  Config c = Config::parse("a: {pairs: [{materials: [sand, sand], k: 1e6}, {materials: [sand, wall], k: 2e6}]}");
+  read(c);
+  const YAML::Node r = c.resolved()["a"]["pairs"];
+  ASSERT_TRUE(r.IsSequence());
+  ASSERT_EQ(r.size(), 2u);
+  EXPECT_EQ(r[1]["k"].as<double>(), 2e6);
+  EXPECT_EQ(r[1]["e"].as<double>(), 0.5);
+  EXPECT_EQ(r[1]["materials"][1].as<std::string>(), "wall");
+  YAML::Emitter e1;
+  e1 << c.resolved();
+  Config again = Config::parse(e1.c_str());
+  read(again);
+  YAML::Emitter e2;
+  e2 << again.resolved();
+  EXPECT_EQ(std::string(e1.c_str()), std::string(e2.c_str()));
+}
+
 TEST(Config, UnknownKeysAreErrors) {
   Config c = Config::parse("a: {x: 1, tpyo: 2}\nb: {y: 3}");
   c.root().section("a").real("x", Dim::none, Range::any());
