@@ -174,6 +174,13 @@ def sensitivity(args):
     fig.savefig(os.path.join(args.out, "sensitivity.png"), dpi=120)
 
 
+def finish_axes(ax, xlabel, ylabel):
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+
+
 def fit(x, y, err):
     """Weighted least squares polynomial (degree 1 for up to 3 points, 2 from 4): coefficients,
     highest power first, and their covariance (from the standard errors, not rescaled)."""
@@ -254,10 +261,7 @@ def scan(args):
         ax.plot(xs, np.polyval(fits[q][0], xs), "-", lw=0.8, label="weighted %s" % form)
         ax.axhline(target, color="k", ls=":", lw=0.8, label="seed (Table 3)")
         ax.axvline(value, color="r", ls="--", lw=0.8, label="calibrated")
-        ax.set_xlabel(key)
-        ax.set_ylabel(label)
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
+        finish_axes(ax, key, label)
     fig.tight_layout()
     fig.savefig(os.path.join(args.out, "scan_%s.png" % tag), dpi=120)
 
@@ -326,10 +330,7 @@ def converge(args, rows):
         b = base[q]["median"]
         ax.axhspan(0.98 * b, 1.02 * b, color="0.85", label="reference median +- 2 %")
         ax.set_xscale("log")
-        ax.set_xlabel(key)
-        ax.set_ylabel(label)
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
+        finish_axes(ax, key, label)
     fig.tight_layout()
     fig.savefig(os.path.join(args.out, "converge_%s.png" % tag), dpi=120)
 
