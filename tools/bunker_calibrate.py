@@ -91,6 +91,18 @@ def shot_case(case_text, overrides, out, tag):
     return path, sets
 
 
+def free_flight_angle(out):
+    """The ball's direction (deg) at the first ball.csv sample after its last contact: a second
+    reading of the release (the seed does not define its moment), against the scene's largest speed."""
+    import math
+    rows = list(csv.DictReader(open(os.path.join(out, "ball.csv"))))
+    touching = [i for i, r in enumerate(rows) if float(r["ball_contact_fx"]) or float(r["ball_contact_fz"])]
+    if not touching or touching[-1] + 1 >= len(rows):
+        return None  # still in contact at the end
+    r = rows[touching[-1] + 1]
+    return math.degrees(math.atan2(float(r["ball_vz"]), float(r["ball_vx"])))
+
+
 def ensemble(args, case_path, sets, tag):
     """args.ensemble shots of the reference point, shot m m x perturbation deeper; their summaries."""
     case_text = open(case_path).read()
@@ -110,8 +122,11 @@ def ensemble(args, case_path, sets, tag):
                     sys.exit("bunker calibrate: %s failed, see %s.log" % (" ".join(cmd), out))
         shots.append(json.load(open(summary)))
     q = lambda key: ensemble_stats([s["quantities"][key] for s in shots])
+    free = [free_flight_angle(os.path.join(args.out, tag + "_m%d" % k)) for k in range(args.ensemble)]
+    free = [a for a in free if a is not None]
     return {"angle": q("release_angle_deg"), "speed": q("release_speed_mps"),
             "loss": q("club_angular_velocity_loss"), "impulse": q("club_upward_impulse"),
+            "angle_free": ensemble_stats(free) if free else None, "free_shots": len(free),
             "shots": len(shots), "wall_s": sorted(s["wall_seconds"] for s in shots)[len(shots) // 2]}
 
 
@@ -220,8 +235,10 @@ def scan(args):
         r = ensemble(args, path, sets, tag)
         r["value"] = v
         rows.append(r)
-        print("%s = %-8g angle %s deg  speed %s m/s  club loses %s rad/s (%d shots)" % (
-            key, v, fmt(r["angle"], "%.2f"), fmt(r["speed"], "%.3f"), fmt(r["loss"], "%.1f"), r["shots"]), flush=True)
+        print("%s = %-8g angle %s deg  speed %s m/s  club loses %s rad/s (%d shots); free-flight angle %s deg "
+              "(%d shots)" % (key, v, fmt(r["angle"], "%.2f"), fmt(r["speed"], "%.3f"), fmt(r["loss"], "%.1f"),
+                              r["shots"], fmt(r["angle_free"], "%.2f") if r["angle_free"] else "-", r["free_shots"]),
+              flush=True)
     if args.reference is not None:
         return converge(args, rows)
     import numpy as np
