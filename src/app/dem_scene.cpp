@@ -38,7 +38,7 @@ DemScene::DemScene(const ConfigNode& root, MPI_Comm comm, const std::string& cas
     dem_->add_free_sphere(b.text("key", b.path()), mat, 0.5 * b.real("diameter", Dim::length, Range::positive()),
                           b.vec3("position", Dim::length), b.vec3("velocity", Dim::velocity, Vec3{}),
                           b.vec3("angular_velocity", Dim::angular_velocity, Vec3{}),
-                          b.real("density", Dim::density, Range::positive(), 0.0));
+                          b.real("density", Dim::density, Range::non_negative(), 0.0));  // 0: the material's
   }
 
   read_loop_keys(root, false);

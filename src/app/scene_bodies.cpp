@@ -67,7 +67,7 @@ SceneBodies::SceneBodies(const ConfigNode& root, const std::string& case_dir, co
         const Vec3 u = axis / norm(axis) * std::sin(half);
         s.q = {std::cos(half), u.x, u.y, u.z};
       }
-      s.density = e.real("density", Dim::density, Range::positive(), 0.0);
+      s.density = e.real("density", Dim::density, Range::non_negative(), 0.0);  // 0: the material's
       body_list_.push_back(s);
     }
     if (body_list_.empty()) b.fail("list", "at least one body");

@@ -95,7 +95,7 @@ class DepositionScene final : public DemScene {
       d.fail("region_max", "a region holding fewer than 2^32 grains");
     // The first max_grains lattice sites (x fastest, then y, then z), if set.
     max_grains_ = d.integer("max_grains", 1, kMaxBodyId, kMaxBodyId);
-    fall_factor_ = d.real("fall_gravity_factor", Dim::none, Range{1.0, 100.0, true, true}, 1.0);
+    fall_factor_ = d.real("fall_gravity_factor", Dim::none, Range{1.0, 100.0, false, true}, 1.0);  // 1: no boost
     if (fall_factor_ > 1) {
       after_landing_ = d.real("after_landing", Dim::time, Range::positive());
       if (d.has("settled_kinetic_energy"))

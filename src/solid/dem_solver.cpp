@@ -21,16 +21,12 @@ namespace tessera {
 DemSettings DemSettings::from_config(const ConfigNode& solid) {
   DemSettings s;
   s.gravity = solid.vec3("gravity", Dim::acceleration, s.gravity);
-  if (solid.has("time_step"))
-    s.time_step = solid.real("time_step", Dim::time, Range::positive());
-  else
-    solid.real("time_step", Dim::time, Range::positive(), 0.0);  // 0 in the resolved case = auto
+  // 0 (what the resolved case records when the key is absent) or no key: from the contact duration.
+  if (const double dt = solid.real("time_step", Dim::time, Range::non_negative(), 0.0); dt > 0) s.time_step = dt;
   s.steps_per_contact = solid.real("steps_per_contact", Dim::none, Range::closed(5, 1e6), s.steps_per_contact);
   s.impact_velocity = solid.real("impact_velocity", Dim::velocity, Range::positive(), s.impact_velocity);
-  if (solid.has("neighbor_skin"))
-    s.skin = solid.real("neighbor_skin", Dim::length, Range::positive());
-  else
-    solid.real("neighbor_skin", Dim::length, Range::positive(), 0.0);  // 0 = auto (0.5 r_min)
+  // 0 (what the resolved case records when the key is absent) or no key: 0.5 r_min.
+  if (const double skin = solid.real("neighbor_skin", Dim::length, Range::non_negative(), 0.0); skin > 0) s.skin = skin;
   if (const auto plane = solid.optional_section("plane")) {
     const std::string n = plane->choice("normal", {"x", "y", "z"});
     s.plane_normal = n[0] - 'x';
