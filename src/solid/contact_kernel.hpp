@@ -19,7 +19,9 @@ struct ContactLanes {
   alignas(64) double dx[width], dy[width], dz[width], ra[width], rb[width];
   alignas(64) double vx[width], vy[width], vz[width], wx[width], wy[width], wz[width];
   alignas(64) double hx[width], hy[width], hz[width];
-  alignas(64) double coef[ContactCoefficients::count][width];
+  alignas(64) double coef[ContactCoefficients::count][width];  // walls: their sets' coefficients
+  alignas(64) double meff[width];                               // pairs: m* and the material pair
+  alignas(64) std::int32_t pair[width];
   alignas(64) double fx[width], fy[width], fz[width], nx[width], ny[width], nz[width];
 
   void set_coefficients(std::size_t lane, const ContactCoefficients& c) {
@@ -27,8 +29,10 @@ struct ContactLanes {
   }
 };
 
-// Body-body contacts: lanes hold d = x_a - x_b, R_a, R_b.
-void evaluate_contacts(LawKind law, ContactLanes& lanes, std::size_t count, double dt);
+// Body-body contacts: lanes hold d = x_a - x_b, R_a, R_b, m* and the material pair, an index into
+// `params` (ContactModel::pair_table); the law's coefficients are made in the lanes (the same
+// expression, so the same bits, as a coefficient table's).
+void evaluate_contacts(LawKind law, ContactLanes& lanes, std::size_t count, double dt, const PairParams* params);
 // Body-wall contacts: lanes hold the unit normal (wall to body) in d, R in ra and the overlap in rb;
 // v and w are the body's v and R w.
 void evaluate_wall_contacts(LawKind law, ContactLanes& lanes, std::size_t count, double dt);

@@ -47,6 +47,7 @@ class ContactModel {
   int material_count() const { return static_cast<int>(materials_.size()); }
 
   const PairParams& pair(int a, int b) const { return table_[a * materials_.size() + b]; }
+  const PairParams* pair_table() const { return table_.data(); }  // pair(a, b) at a * material_count() + b
   bool has_pair(int a, int b) const { return defined_[a * materials_.size() + b]; }
   void set_pair(int a, int b, const PairParams& p);
 

@@ -25,11 +25,11 @@ void DemSolver::store_forces() {
 void DemSolver::fill_coefficients() {
   // Walls, meshes: m* = m, R* = R (T7); free spheres with grains: m* and R* of the two.
   with_law(model_.law(), [&](auto law) { coefficients_.start<decltype(law)>(model_); });
-  pairs_.fill_coefficients(entities_, coefficients_);
+  pairs_.fill_materials(entities_, model_);
   auto lookup = [&](int ma, int mb, double meff, double reff) { return coefficients_.find(ma, mb, meff, reff); };
   plane_walls_.fill_coefficients(entities_, walls_, lookup);
   mesh_walls_.fill_coefficients(entities_, walls_.meshes(), lookup);
-  free_.fill_coefficients(entities_, walls_, lookup);
+  free_.fill_coefficients(walls_, lookup);
 }
 
 void DemSolver::compute_forces(bool update_history) {
@@ -40,7 +40,7 @@ void DemSolver::compute_forces(bool update_history) {
     // Owned bodies' mirrors were packed by the integrator unless a rebuild moved them; shaped
     // bodies' elements were all placed.
     const std::size_t packed = shaped() ? entities_.size() : (owned_mirrors_current_ ? p_.owned : 0);
-    pairs_.forces(entities_, packed, lanes_, coefficients_.data(), model_.law(), dt, update_history);
+    pairs_.forces(entities_, packed, lanes_, model_, dt, update_history);
   }
   {
     auto t = timers_.scope("wall_forces");
@@ -51,7 +51,7 @@ void DemSolver::compute_forces(bool update_history) {
     if (meshes.empty() && free_.empty()) return;
     loads_.clear();
     if (!meshes.empty()) mesh_walls_.forces(entities_, meshes, lanes_, sets, law, dt, loads_);
-    if (!free_.empty()) free_.grain_forces(entities_, lanes_, sets, law, dt, meshes.size(), loads_);
+    if (!free_.empty()) free_.grain_forces(entities_, lanes_, model_, dt, meshes.size(), loads_);
     // A pivot and a free sphere need the whole load every step; other meshes only when reported.
     bool now = !free_.empty();
     for (const auto& m : meshes) now = now || m.motion == MeshWall::Motion::pivot;

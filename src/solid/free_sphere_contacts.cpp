@@ -40,8 +40,8 @@ void FreeSphereContacts::find(const ContactEntities& entities, double skin) {
   }
 }
 
-void FreeSphereContacts::grain_forces(ContactEntities& entities, ContactLanes& L, const ContactCoefficients* sets,
-                                      LawKind law, double dt, std::size_t mesh_count, ReplicatedLoads& loads) {
+void FreeSphereContacts::grain_forces(ContactEntities& entities, ContactLanes& L, const ContactModel& model,
+                                      double dt, std::size_t mesh_count, ReplicatedLoads& loads) {
   // Owned grains against the spheres, with the body-body law (d = x_grain - x_sphere).
   for (auto& s : spheres_) s.force = s.torque = Vec3{};
   grain_hist_next_.clear();
@@ -52,7 +52,7 @@ void FreeSphereContacts::grain_forces(ContactEntities& entities, ContactLanes& L
   std::size_t entity[W];
   std::size_t nb = 0;
   auto flush = [&] {
-    evaluate_contacts(law, L, nb, dt);
+    evaluate_contacts(model.law(), L, nb, dt, model.pair_table());
     for (std::size_t j = 0; j < nb; ++j) {
       grain_hist_next_[keys[j]] = {L.hx[j], L.hy[j], L.hz[j]};
       entities.add_wall_reaction(entity[j], L, j);
@@ -82,8 +82,9 @@ void FreeSphereContacts::grain_forces(ContactEntities& entities, ContactLanes& L
     L.wy[nb] = me.wy * ge.r + s.omega.y * s.radius;
     L.wz[nb] = me.wz * ge.r + s.omega.z * s.radius;
     L.hx[nb] = h[0], L.hy[nb] = h[1], L.hz[nb] = h[2];
-    const ContactCoefficients& cs = sets[coefficient_[k]];
-    L.set_coefficients(nb, cs);
+    const double m = entities.mass(e);
+    L.meff[nb] = m * s.mass / (m + s.mass);
+    L.pair[nb] = entities.material(e) * model.material_count() + s.material;
     sphere[nb] = b, entity[nb] = e;
     if (++nb == W) flush();
   }

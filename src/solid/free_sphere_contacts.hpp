@@ -33,14 +33,9 @@ class FreeSphereContacts {
   // Coefficient sets: with grains as a body pair (m*, R* of the two), with walls and meshes as a
   // wall (the sphere's m and R). lookup(material a, material b, m*, R*) -> index.
   template <class Lookup>
-  void fill_coefficients(const ContactEntities& entities, const Walls& walls, Lookup&& lookup) {
-    coefficient_.resize(entity_.size());
-    for (std::size_t k = 0; k < entity_.size(); ++k) {
-      const std::size_t e = entity_[k];
-      const FreeSphere& s = spheres_[sphere_of_[k]];
-      const double m = entities.mass(e), r = entities.radius(e);
-      coefficient_[k] = lookup(entities.material(e), s.material, m * s.mass / (m + s.mass), r * s.radius / (r + s.radius));
-    }
+  // The spheres' coefficient sets with the walls and meshes (grains take the body-body law's
+  // coefficients in the kernel, from their material pair and m*).
+  void fill_coefficients(const Walls& walls, Lookup&& lookup) {
     wall_coefficient_.clear();
     for (const auto& s : spheres_) {
       for (const auto& w : walls.primitives()) wall_coefficient_.push_back(lookup(s.material, w.material, s.mass, s.radius));
@@ -50,8 +45,8 @@ class FreeSphereContacts {
   // The owned entities' contacts with the spheres into the entities' contact buffer; their
   // reactions listed in `loads` (target: mesh_count + sphere). The spheres' force and torque are
   // reset; the springs advanced by dt (dt = 0: unchanged).
-  void grain_forces(ContactEntities& entities, ContactLanes& lanes, const ContactCoefficients* sets, LawKind law,
-                    double dt, std::size_t mesh_count, ReplicatedLoads& loads);
+  void grain_forces(ContactEntities& entities, ContactLanes& lanes, const ContactModel& model, double dt,
+                    std::size_t mesh_count, ReplicatedLoads& loads);
   // Every rank alike: each sphere against the wall planes and the meshes, added to the spheres'
   // and the meshes' loads.
   void wall_forces(Walls& walls, ContactLanes& lanes, const ContactCoefficients* sets, LawKind law, double dt);
@@ -65,7 +60,7 @@ class FreeSphereContacts {
 
  private:
   std::vector<FreeSphere> spheres_;
-  std::vector<std::int32_t> entity_, sphere_of_, coefficient_, wall_coefficient_;  // walls: sphere-major
+  std::vector<std::int32_t> entity_, sphere_of_, wall_coefficient_;  // walls: sphere-major
   HistoryMap grain_hist_, grain_hist_next_, wall_hist_, wall_hist_next_;
   struct Touch {  // a sphere's contact with a wall plane (mesh -1) or a mesh
     PairKey key;

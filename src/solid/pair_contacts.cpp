@@ -12,24 +12,14 @@ void PairContacts::start_list() {
         list_.history[3 * k] != 0.0 || list_.history[3 * k + 1] != 0.0 || list_.history[3 * k + 2] != 0.0;
 }
 
-void PairContacts::fill_coefficients(const ContactEntities& entities, CoefficientTable& table) {
-  // Grains of many sizes make nearly every pair's (m*, R*) distinct: once the first 256 pairs show
-  // that (more than half of them new sets), the rest get their own sets without the hash map.
-  coefficient_.resize(list_.size());
-  constexpr std::size_t probe = 256;
-  bool shared = true;
-  for (std::size_t k = 0; k < list_.size(); ++k) {
-    const std::size_t a = list_.first[k], b = list_.second[k];
-    const double ra = entities.radius(a), rb = entities.radius(b);
-    const int ma = entities.material(a), mb = entities.material(b);
-    const double reff = ra * rb / (ra + rb);
-    if (shared) {
-      coefficient_[k] = table.find(ma, mb, list_.meff[k], reff);
-      if (k + 1 == probe && 2 * table.size() > probe) shared = false;
-    } else {
-      coefficient_[k] = table.add(ma, mb, list_.meff[k], reff);
-    }
-  }
+void PairContacts::fill_materials(const ContactEntities& entities, const ContactModel& model) {
+  // The law's per-pair coefficients (five doubles) are not stored: the kernel makes them from the
+  // material pair's parameters, m* (listed) and R* (the lanes' radii), which streams 12 bytes a
+  // contact instead of 44 and leaves nothing to fill at a list build but this index.
+  material_pair_.resize(list_.size());
+  const int nm = model.material_count();
+  for (std::size_t k = 0; k < list_.size(); ++k)
+    material_pair_[k] = entities.material(list_.first[k]) * nm + entities.material(list_.second[k]);
 }
 
 // The pair loop's access to one mirror layout: packing a body's mirror, pass 1's overlap test, the
@@ -127,18 +117,18 @@ struct PairContacts::DiscMirrors {  // plane mode, normal along axis N (kernel_m
 };
 
 void PairContacts::forces(ContactEntities& entities, std::size_t packed, ContactLanes& lanes,
-                          const ContactCoefficients* sets, LawKind law, double dt, bool update_history) {
+                          const ContactModel& model, double dt, bool update_history) {
   entities.start_forces();
   const ParticleStore& p = entities.bodies();
   if (!entities.discs()) {
     SphereMirrors view{p, entities, entities.geometry_mirrors().data(), entities.motion_mirrors().data(),
                        entities.forces().data(), entities.shaped()};
-    loop(view, entities, packed, lanes, sets, law, dt, update_history);
+    loop(view, entities, packed, lanes, model, dt, update_history);
     return;
   }
   DiscMirror* g = entities.disc_mirrors().data();
   DiscForce* f = entities.disc_forces().data();
-  auto run = [&](auto view) { loop(view, entities, packed, lanes, sets, law, dt, update_history); };
+  auto run = [&](auto view) { loop(view, entities, packed, lanes, model, dt, update_history); };
   switch (entities.plane_normal()) {
     case 0: run(DiscMirrors<0>{p, g, f}); break;
     case 1: run(DiscMirrors<1>{p, g, f}); break;
@@ -148,7 +138,7 @@ void PairContacts::forces(ContactEntities& entities, std::size_t packed, Contact
 
 template <class Mirrors>
 void PairContacts::loop(Mirrors& view, ContactEntities& entities, std::size_t packed, ContactLanes& L,
-                        const ContactCoefficients* sets, LawKind law, double dt, bool update_history) {
+                        const ContactModel& model, double dt, bool update_history) {
   const std::size_t n = entities.size();
   const std::size_t np = list_.size();
   const std::int32_t* first = list_.first.data();
@@ -184,24 +174,26 @@ void PairContacts::loop(Mirrors& view, ContactEntities& entities, std::size_t pa
   // Pass 2, in blocks: gather the pairs' data into lanes, evaluate the law on all lanes
   // (vectorised, contact_kernel.cpp), then accumulate forces in canonical order.
   constexpr std::size_t B = ContactLanes::width;
-  const std::int32_t* pc = coefficient_.data();
+  const std::int32_t* pm = material_pair_.data();
+  const double* meff = list_.meff.data();
+  const PairParams* params = model.pair_table();
+  const LawKind law = model.law();
   for (std::size_t s = 0; s < nt; s += B) {
     const std::size_t nb = std::min(B, nt - s);
     for (std::size_t j = 0; j < nb; ++j) {
       if (s + j + ahead < nt) {
         // The partner's lines (pass 1 read its geometry long ago: a large bed's mirrors leave the
-        // cache in between), the pair's history and its coefficient set.
+        // cache in between) and the pair's history.
         const std::size_t kk = static_cast<std::size_t>(touching_[s + j + ahead]);
         view.prefetch_partner(second[kk]);
         __builtin_prefetch(&hist[3 * kk], 1);
-        __builtin_prefetch(&sets[pc[kk]]);
       }
       const std::size_t k = static_cast<std::size_t>(touching_[s + j]);
       view.gather(L, j, first[k], second[k]);
       L.hx[j] = hist[3 * k], L.hy[j] = hist[3 * k + 1], L.hz[j] = hist[3 * k + 2];
-      L.set_coefficients(j, sets[pc[k]]);
+      L.meff[j] = meff[k], L.pair[j] = pm[k];
     }
-    evaluate_contacts(law, L, nb, dt);
+    evaluate_contacts(law, L, nb, dt, params);
     for (std::size_t j = 0; j < nb; ++j) {
       const std::size_t k = static_cast<std::size_t>(touching_[s + j]);
       hist[3 * k] = L.hx[j], hist[3 * k + 1] = L.hy[j], hist[3 * k + 2] = L.hz[j];

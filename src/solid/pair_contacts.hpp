@@ -25,13 +25,14 @@ class PairContacts {
   const NeighborList& list() const { return list_; }
   // After a list build: which pairs touched, from their springs.
   void start_list();
-  // The coefficient set of each listed pair.
-  void fill_coefficients(const ContactEntities& entities, CoefficientTable& table);
+  // The material pair of each listed pair (its index in the model's pair table): the law's
+  // coefficients come from it, m* and R* in the kernel's lanes (T1-T7).
+  void fill_materials(const ContactEntities& entities, const ContactModel& model);
   // This step's pair forces into the entities' contact buffer (emptied first). `packed`: the
   // leading entities whose mirrors the integrator already packed this step. dt = 0 and
   // update_history = false leave the springs and the touching flags as they are (set-up).
-  void forces(ContactEntities& entities, std::size_t packed, ContactLanes& lanes, const ContactCoefficients* sets,
-              LawKind law, double dt, bool update_history);
+  void forces(ContactEntities& entities, std::size_t packed, ContactLanes& lanes, const ContactModel& model,
+              double dt, bool update_history);
 
  private:
   struct SphereMirrors;
@@ -39,10 +40,10 @@ class PairContacts {
   struct DiscMirrors;
   template <class Mirrors>
   void loop(Mirrors& view, ContactEntities& entities, std::size_t packed, ContactLanes& lanes,
-            const ContactCoefficients* sets, LawKind law, double dt, bool update_history);
+            const ContactModel& model, double dt, bool update_history);
 
   NeighborList list_;
-  std::vector<std::int32_t> coefficient_;  // per listed pair, into the coefficient table
+  std::vector<std::int32_t> material_pair_;  // per listed pair, into the model's pair table
   // Listed pairs touching now (ascending list indices); per listed pair, whether it touched at the
   // previous evaluation that advanced the springs.
   std::vector<std::int32_t> touching_;
