@@ -56,7 +56,7 @@ class NeighborList {
     PairKey key;
     std::int32_t a, b;
   };
-  std::vector<Candidate> candidates_;
+  std::vector<Candidate> candidates_, sorted_;  // sorted_: the radix sort's other buffer
   std::vector<PairKey> previous_keys_;
   std::vector<double> previous_history_;
   std::vector<std::int32_t> cell_start_, cell_items_, cell_of_;

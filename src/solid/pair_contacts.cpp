@@ -3,6 +3,8 @@
 
 #include <algorithm>
 
+#include "solid/disc_overlaps.hpp"
+
 namespace tessera {
 
 void PairContacts::start_list() {
@@ -38,12 +40,33 @@ struct PairContacts::SphereMirrors {  // 3D mirrors per element (spheres, shaped
     g[i] = {x[0], x[1], x[2], p.radius[i]};
     m[i] = {v[0], v[1], v[2], w[0], w[1], w[2]};
   }
+  // Pass 1, branch-free: which listed pairs touch (about half of them in a dense bed, at random,
+  // which a branch would mispredict). The compacted list keeps the canonical order.
+  // Contacts that opened since the last evaluation lose their history (T3): a pair that touched then
+  // (was) and does not now. Rare, so the branch is predicted. (was = nullptr: the springs stay.)
+  std::size_t find_touching(const std::int32_t* first, const std::int32_t* second, std::size_t np,
+                            std::int32_t* out, std::uint8_t* was, double* hist) const {
+    // Partners are scattered over ~1000 bodies, and a large bed's mirrors come from memory: pass 1
+    // spends a few ns a pair, so it looks further ahead than pass 2.
+    constexpr std::size_t ahead = 64;
+    std::size_t nt = 0;
+    for (std::size_t k = 0; k < np; ++k) {
+      if (k + ahead < np) __builtin_prefetch(&g[second[k + ahead]]);
+      out[nt] = static_cast<std::int32_t>(k);
+      const bool touch = touching(first[k], second[k]);
+      nt += touch ? 1 : 0;
+      if (was) {
+        if (was[k] && !touch) hist[3 * k] = hist[3 * k + 1] = hist[3 * k + 2] = 0.0;
+        was[k] = touch ? 1 : 0;
+      }
+    }
+    return nt;
+  }
   bool touching(std::size_t a, std::size_t b) const {
     const KernelGeometry &ga = g[a], &gb = g[b];
     const double dx = ga.x - gb.x, dy = ga.y - gb.y, dz = ga.z - gb.z, rsum = ga.r + gb.r;
     return dx * dx + dy * dy + dz * dz < rsum * rsum;
   }
-  void prefetch_geometry(std::size_t b) const { __builtin_prefetch(&g[b]); }
   void prefetch_partner(std::size_t b) const {
     __builtin_prefetch(&g[b]);
     __builtin_prefetch(&m[b]);
@@ -85,12 +108,11 @@ struct PairContacts::DiscMirrors {  // plane mode, normal along axis N (kernel_m
     const double* v = &p.v[3 * i];
     g[i] = {x[U], x[V], p.radius[i], v[U], v[V], p.omega[3 * i + N]};
   }
-  bool touching(std::size_t a, std::size_t b) const {
-    const DiscMirror &ga = g[a], &gb = g[b];
-    const double du = ga.u - gb.u, dv = ga.v - gb.v, rsum = ga.r + gb.r;
-    return du * du + dv * dv < rsum * rsum;
+  // Pass 1: vectorised (disc_overlaps.hpp).
+  std::size_t find_touching(const std::int32_t* first, const std::int32_t* second, std::size_t np,
+                            std::int32_t* out, std::uint8_t* was, double* hist) const {
+    return find_disc_overlaps({g, first, second, np, out, was, hist});
   }
-  void prefetch_geometry(std::size_t b) const { __builtin_prefetch(&g[b]); }
   void prefetch_partner(std::size_t b) const {
     __builtin_prefetch(&g[b]);
     __builtin_prefetch(&out[b], 1);
@@ -147,27 +169,12 @@ void PairContacts::loop(Mirrors& view, ContactEntities& entities, std::size_t pa
   // Owned bodies were packed by the integrator unless a rebuild moved them; ghosts always here.
   // (Shaped mode: every element was placed by ContactEntities::place.)
   for (std::size_t i = packed; i < n; ++i) view.pack(i);
-  // Pass 1, branch-free: which listed pairs touch (about half of them in a dense bed, at random,
-  // which a branch would mispredict). The compacted list keeps the canonical order.
-  // Contacts that opened since the last evaluation lose their history (T3): a pair that touched then
-  // (was_touching_) and does not now. Rare, so the branch is predicted.
-  touching_.resize(np);
+  // Pass 1: which listed pairs touch, in list order (the view's find_touching).
+  touching_.resize(np + 8);
   was_touching_.resize(np, 0);
-  std::uint8_t* was = was_touching_.data();
-  std::size_t nt = 0;
-  // Prefetch distances: partners are scattered over ~1000 bodies, and a large bed's mirrors come
-  // from memory. Pass 1 spends a few ns a pair, so it looks further ahead than pass 2.
-  constexpr std::size_t ahead = 16, ahead1 = 64;
-  for (std::size_t k = 0; k < np; ++k) {
-    if (k + ahead1 < np) view.prefetch_geometry(second[k + ahead1]);
-    touching_[nt] = static_cast<std::int32_t>(k);
-    const bool touch = view.touching(first[k], second[k]);
-    nt += touch ? 1 : 0;
-    if (update_history) {
-      if (was[k] && !touch) hist[3 * k] = hist[3 * k + 1] = hist[3 * k + 2] = 0.0;
-      was[k] = touch ? 1 : 0;
-    }
-  }
+  const std::size_t nt = view.find_touching(first, second, np, touching_.data(),
+                                            update_history ? was_touching_.data() : nullptr, hist);
+  constexpr std::size_t ahead = 16;  // pass 2's prefetch distance
   touching_.resize(nt);
   if (entities.shaped())
     for (const auto k : touching_) entities.refresh_motion(first[k]), entities.refresh_motion(second[k]);

@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: MIT
 // The DEM's pair stage (T1-T4): contacts between the entities (contact_entities.hpp) of the Verlet
 // list (neighbor_list.hpp), in its canonical pair order. It owns the list (pairs, their springs and
-// m*), each listed pair's coefficient set, and which listed pairs touch now and touched at the last
+// m*), each listed pair's material pair, and which listed pairs touch now and touched at the last
 // evaluation that advanced the springs (a contact that opened loses its spring, T3).
 //
-// The loop, per evaluation: pass 1 (branch-free) finds the touching pairs; pass 2 gathers them into
+// The loop, per evaluation: pass 1 (branch-free; discs: disc_overlaps.hpp) finds the touching pairs; pass 2 gathers them into
 // lanes in blocks, evaluates the law on the lanes (contact_kernel.hpp, vectorised) and adds each
 // force to its two bodies in pair order, which is canonical: the same bits on any rank count. It
 // runs over either mirror layout of the kernel (3D, or discs in plane mode: kernel_mirrors.hpp).
