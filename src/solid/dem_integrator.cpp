@@ -140,6 +140,37 @@ void DemSolver::integrate_first_impl() {
   kick_pending_ = false;
   const KernelForce* __restrict kf = entities_.forces().data();
   const DiscForce* __restrict kd = entities_.disc_forces().data();
+  if constexpr (kDiscs) {
+    // Discs: only the in-plane components move (the normal's velocity and the in-plane spin stay
+    // zero, the position along the normal stays put). The same operations on those components as
+    // the 3D loop below, without its masks (a product by 1) and zero terms (a sum with +0): the
+    // same bits.
+    constexpr int A = plane_a, B = plane_b, N = normal;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double a = inv_m[i], b = inv_i[i];  // loads before stores (4K aliasing: see below)
+      double va = v[3 * i + A], vb = v[3 * i + B], wn = w[3 * i + N];
+      double fa, fb, tn;
+      if (both) {
+        fa = kd[i].fu, fb = kd[i].fv, tn = kd[i].tn;
+        if constexpr (kExternal) fa += fe[3 * i + A], fb += fe[3 * i + B], tn += te[3 * i + N];
+        va = va + h * (fa * a + g[A]), vb = vb + h * (fb * a + g[B]), wn = wn + h * tn * b;
+      } else {
+        fa = f[3 * i + A], fb = f[3 * i + B], tn = t[3 * i + N];
+        if constexpr (kExternal) fa += fe[3 * i + A], fb += fe[3 * i + B], tn += te[3 * i + N];
+      }
+      va = va + h * (fa * a + g[A]), vb = vb + h * (fb * a + g[B]), wn = wn + h * tn * b;
+      const double xa = x[3 * i + A] + dt * va, xb = x[3 * i + B] + dt * vb;
+      const double da = xa - x0[3 * i + A], db = xb - x0[3 * i + B];
+      const double ma = xa - xm[3 * i + A], mb = xb - xm[3 * i + B];
+      v[3 * i + A] = va, v[3 * i + B] = vb, w[3 * i + N] = wn, x[3 * i + A] = xa, x[3 * i + B] = xb;
+      if (owned_mirrors_current_) kdm[i] = {xa, xb, p_.radius[i], va, vb, wn};
+      turn[i] += dt * wn;
+      moved2 = std::max(moved2, da * da + db * db);
+      moved_since_walls2 = std::max(moved_since_walls2, ma * ma + mb * mb);
+    }
+    moved2_[0] = moved2, moved2_[1] = moved_since_walls2;
+    return;
+  }
   for (std::size_t i = 0; i < n; ++i) {
     // The body arrays are page-aligned allocations of equal size: a store to v[j] followed by a
     // load of x[j] would stall (4K aliasing). Load a body's values first, then store.
