@@ -170,14 +170,18 @@ void PairContacts::loop(Mirrors& view, ContactEntities& entities, std::size_t pa
   // (Shaped mode: every element was placed by ContactEntities::place.)
   for (std::size_t i = packed; i < n; ++i) view.pack(i);
   // Pass 1: which listed pairs touch, in list order (the view's find_touching).
-  touching_.resize(np + 8);
+  // touching_ keeps its size (a shrink and a regrow would zero-fill it at every evaluation): its
+  // first nt entries are this evaluation's.
+  if (touching_.size() < np + 8) touching_.resize(np + 8);
   was_touching_.resize(np, 0);
   const std::size_t nt = view.find_touching(first, second, np, touching_.data(),
                                             update_history ? was_touching_.data() : nullptr, hist);
   constexpr std::size_t ahead = 16;  // pass 2's prefetch distance
-  touching_.resize(nt);
   if (entities.shaped())
-    for (const auto k : touching_) entities.refresh_motion(first[k]), entities.refresh_motion(second[k]);
+    for (std::size_t t = 0; t < nt; ++t) {
+      entities.refresh_motion(first[touching_[t]]);
+      entities.refresh_motion(second[touching_[t]]);
+    }
   // Pass 2, in blocks: gather the pairs' data into lanes, evaluate the law on all lanes
   // (vectorised, contact_kernel.cpp), then accumulate forces in canonical order.
   constexpr std::size_t B = ContactLanes::width;

@@ -46,7 +46,7 @@ class PairContacts {
   std::vector<std::int32_t> material_pair_;  // per listed pair, into the model's pair table
   // Listed pairs touching now (ascending list indices); per listed pair, whether it touched at the
   // previous evaluation that advanced the springs.
-  std::vector<std::int32_t> touching_;
+  std::vector<std::int32_t> touching_;  // the first ones (as many as touch) are this evaluation's
   std::vector<std::uint8_t> was_touching_;
 };
 
