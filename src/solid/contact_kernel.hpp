@@ -33,6 +33,11 @@ struct ContactLanes {
 // `params` (ContactModel::pair_table); the law's coefficients are made in the lanes (the same
 // expression, so the same bits, as a coefficient table's).
 void evaluate_contacts(LawKind law, ContactLanes& lanes, std::size_t count, double dt, const PairParams* params);
+// Disc-disc contacts (plane mode, normal along axis `normal`): lanes as body-body contacts', read
+// and written in the plane's components only (d, v and the spring in-plane, w about the normal; the
+// force in-plane and n x F along the normal): the others are neither read nor written.
+void evaluate_disc_contacts(LawKind law, int normal, ContactLanes& lanes, std::size_t count, double dt,
+                            const PairParams* params);
 // Body-wall contacts: lanes hold the unit normal (wall to body) in d, R in ra and the overlap in rb;
 // v and w are the body's v and R w.
 void evaluate_wall_contacts(LawKind law, ContactLanes& lanes, std::size_t count, double dt);

@@ -113,33 +113,55 @@ struct HertzMindlin {
   }
 };
 
+// A vector in the plane of plane mode (T15): the in-plane components (u, v) of a 3D one whose
+// normal component is zero, for the disc kernel. Its operations are the 3D ones without the zero
+// terms: the same values (a term +0 in a sum changes at most the sign of a zero result).
+struct PlaneVector {
+  double u, v;
+  PlaneVector operator+(const PlaneVector& o) const { return {u + o.u, v + o.v}; }
+  PlaneVector operator-(const PlaneVector& o) const { return {u - o.u, v - o.v}; }
+  PlaneVector operator*(double s) const { return {u * s, v * s}; }
+  PlaneVector operator-() const { return {-u, -v}; }
+  PlaneVector& operator*=(double s) {
+    u *= s, v *= s;
+    return *this;
+  }
+};
+inline double dot(const PlaneVector& a, const PlaneVector& b) { return a.u * b.u + a.v * b.v; }
+inline double norm2(const PlaneVector& a) { return dot(a, a); }
+
+// Component-wise a where s, b elsewhere (a select, which vectorises).
+inline Vec3 pick(bool s, const Vec3& a, const Vec3& b) { return {s ? a.x : b.x, s ? a.y : b.y, s ? a.z : b.z}; }
+inline PlaneVector pick(bool s, const PlaneVector& a, const PlaneVector& b) { return {s ? a.u : b.u, s ? a.v : b.v}; }
+
 // Force on body a for one touching contact; updates the tangential spring xi (T3, T4). Written
 // without branches (selects only) so that a loop over contacts vectorises; every lane computes
-// exactly what a scalar call would, so results do not depend on the vector width.
-template <class Law>
-inline Vec3 contact_force(const typename Law::Coefficients& c, double delta, const Vec3& n, const Vec3& v_rel,
-                          double dt, Vec3& xi) {
+// exactly what a scalar call would, so results do not depend on the vector width. V: Vec3, or
+// PlaneVector for discs (the same steps on the in-plane components).
+template <class Law, class V>
+inline V contact_force(const typename Law::Coefficients& c, double delta, const V& n, const V& v_rel, double dt,
+                       V& xi) {
   const double vn = dot(v_rel, n);
-  const Vec3 vt = v_rel - n * vn;
+  const V vt = v_rel - n * vn;
   double fn = 0, kt = 0, gt = 0;
   Law::evaluate(c, delta, vn, fn, kt, gt);
   // Rotate the spring onto the tangent plane and restore its length: factor sqrt(1 + t),
   // t = xn^2 / |xi_projected|^2. The normal turns little in one step (t ~ (w dt)^2), where the
   // series to t^2 is exact to round-off (error < t^3 / 16).
   const double xn = dot(xi, n);
-  const Vec3 projected = xi - n * xn;
+  const V projected = xi - n * xn;
   const double p2 = norm2(projected);
   const double t = xn * xn / (p2 > 0.0 ? p2 : 1.0);
   const double factor = t < 1e-6 ? 1.0 + t * (0.5 - 0.125 * t) : std::sqrt(1.0 + t);
   xi = projected * factor + vt * dt;
-  Vec3 ft = -(xi * kt + vt * gt);
+  V ft = -(xi * kt + vt * gt);
   const double limit = c.friction * std::fabs(fn);
   const double ft2 = norm2(ft);
   const bool slide = ft2 > limit * limit;
   const double scale = slide ? limit / std::sqrt(ft2 > 0.0 ? ft2 : 1.0) : 1.0;
   ft *= scale;
   const double inv_kt = kt > 0.0 ? -1.0 / kt : 0.0;
-  xi = Vec3{slide ? ft.x * inv_kt : xi.x, slide ? ft.y * inv_kt : xi.y, slide ? ft.z * inv_kt : xi.z};
+  xi = pick(slide, ft * inv_kt, xi);
   return n * fn + ft;
 }
 

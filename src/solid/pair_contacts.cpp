@@ -82,6 +82,9 @@ struct PairContacts::SphereMirrors {  // 3D mirrors per element (spheres, shaped
     L.wy[j] = ma.wy * ga.r + mb.wy * gb.r;
     L.wz[j] = ma.wz * ga.r + mb.wz * gb.r;
   }
+  void evaluate(LawKind law, ContactLanes& L, std::size_t count, double dt, const PairParams* params) const {
+    evaluate_contacts(law, L, count, dt, params);
+  }
   void accumulate(const ContactLanes& L, std::size_t j, std::size_t ea, std::size_t eb) {
     const std::size_t a = sh ? entities.body(ea) : ea;
     const std::size_t b = sh ? entities.body(eb) : eb;
@@ -117,15 +120,20 @@ struct PairContacts::DiscMirrors {  // plane mode, normal along axis N (kernel_m
     __builtin_prefetch(&g[b]);
     __builtin_prefetch(&out[b], 1);
   }
+  // The in-plane lanes only (the disc kernel reads no others) and the spring's three components
+  // (the pair loop stores three back: the normal one stays as listed, zero).
   void gather(ContactLanes& L, std::size_t j, std::size_t a, std::size_t b) const {
     const DiscMirror &ga = g[a], &gb = g[b];
     double* d[3] = {L.dx, L.dy, L.dz};
     double* v[3] = {L.vx, L.vy, L.vz};
-    double* w[3] = {L.wx, L.wy, L.wz};
-    d[U][j] = ga.u - gb.u, d[V][j] = ga.v - gb.v, d[N][j] = 0.0;
+    d[U][j] = ga.u - gb.u, d[V][j] = ga.v - gb.v;
     L.ra[j] = ga.r, L.rb[j] = gb.r;
-    v[U][j] = ga.vu - gb.vu, v[V][j] = ga.vv - gb.vv, v[N][j] = 0.0;
-    w[U][j] = 0.0, w[V][j] = 0.0, w[N][j] = ga.wn * ga.r + gb.wn * gb.r;
+    v[U][j] = ga.vu - gb.vu, v[V][j] = ga.vv - gb.vv;
+    double* w[3] = {L.wx, L.wy, L.wz};
+    w[N][j] = ga.wn * ga.r + gb.wn * gb.r;
+  }
+  void evaluate(LawKind law, ContactLanes& L, std::size_t count, double dt, const PairParams* params) const {
+    evaluate_disc_contacts(law, N, L, count, dt, params);
   }
   void accumulate(const ContactLanes& L, std::size_t j, std::size_t a, std::size_t b) {
     const double* f[3] = {L.fx, L.fy, L.fz};
@@ -204,7 +212,7 @@ void PairContacts::loop(Mirrors& view, ContactEntities& entities, std::size_t pa
       L.hx[j] = hist[3 * k], L.hy[j] = hist[3 * k + 1], L.hz[j] = hist[3 * k + 2];
       L.meff[j] = meff[k], L.pair[j] = pm[k];
     }
-    evaluate_contacts(law, L, nb, dt, params);
+    view.evaluate(law, L, nb, dt, params);
     for (std::size_t j = 0; j < nb; ++j) {
       const std::size_t k = static_cast<std::size_t>(touching_[s + j]);
       hist[3 * k] = L.hx[j], hist[3 * k + 1] = L.hy[j], hist[3 * k + 2] = L.hz[j];
