@@ -109,8 +109,12 @@ int run(const Args& args, int rank) {
   if (!args.petsc_options.empty() && PetscOptionsInsertString(nullptr, args.petsc_options.c_str()))
     throw InputError("--petsc", args.petsc_options, "PETSc options, e.g. \"-poisson_pc_type gamg\"");
 #endif
-  const std::string case_dir = fs::path(args.case_file).parent_path().string();
-  auto scene = make_scene(config.root(), MPI_COMM_WORLD, case_dir.empty() ? "." : case_dir);
+  // Relative file paths (a bed, bodies, meshes) resolve against the case's directory. The resolved
+  // case records it (case.resolved.yaml lives in the output directory), so that it runs again.
+  const fs::path file_dir = fs::path(args.case_file).parent_path();
+  const std::string case_dir = config.root().text(
+      "case_directory", fs::absolute(file_dir.empty() ? fs::path(".") : file_dir).lexically_normal().string());
+  auto scene = make_scene(config.root(), MPI_COMM_WORLD, case_dir);
   config.check_unused();  // every key was read: anything left is unknown
 
   RunOptions opt;

@@ -116,6 +116,24 @@ TEST(RunOutputs, ResolvedCaseRunsAgainToTheSameAnswer) {
   EXPECT_EQ(sa["quantities"].dump(), sb["quantities"].dump());
 }
 
+TEST(RunOutputs, ResolvedCaseFindsTheCaseFilesRelativePaths) {
+  // The blast case's mesh (block.msh) is relative to cases/blast/; its resolved case, in the output
+  // directory, records that directory as case_directory and runs again from there.
+  if (!rank0()) return;
+  const fs::path a = fs::temp_directory_path() / "tessera_relative_a", b = fs::temp_directory_path() / "tessera_relative_b";
+  fs::remove_all(a), fs::remove_all(b);
+  const std::string quick = " --quiet --set output.snapshot_interval=0 --set run.end_time=2e-7";
+  const auto first = run_shell(std::string(TESSERA_BIN) + " run " + std::string(TESSERA_SOURCE_DIR) +
+                               "/cases/blast/blast.yaml" + quick + " --output " + a.string());
+  ASSERT_EQ(first.code, 0) << first.output;
+  const auto again = run_shell(std::string(TESSERA_BIN) + " run " + (a / "case.resolved.yaml").string() +
+                               " --quiet --output " + b.string());
+  ASSERT_EQ(again.code, 0) << again.output;
+  std::ifstream ia(a / "summary.json"), ib(b / "summary.json");
+  const auto sa = nlohmann::json::parse(ia), sb = nlohmann::json::parse(ib);
+  EXPECT_EQ(sa["quantities"].dump(), sb["quantities"].dump());
+}
+
 TEST(RunOutputs, ShapedGrainsWriteTheirSurfaces) {
   // 40 seed grains, ending on a snapshot time (0.5 ms = 680 steps of 7.35e-7 s, rounded up).
   if (!rank0()) return;
