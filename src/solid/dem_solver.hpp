@@ -37,6 +37,7 @@
 #include "core/decomposition.hpp"
 #include "core/exact_sum.hpp"
 #include "core/timers.hpp"
+#include "solid/coefficient_table.hpp"
 #include "solid/contact_entities.hpp"
 #include "solid/contact_history.hpp"
 #include "solid/contact_kernel.hpp"

@@ -4,6 +4,8 @@
 #include <bit>
 #include <cstddef>
 
+#include "solid/touching_pass.hpp"
+
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
 #define TESSERA_DISC_AVX512 1
@@ -13,23 +15,15 @@ namespace tessera {
 
 namespace {
 
-constexpr std::size_t kAhead = 64;  // partners' lines prefetched this many pairs ahead (pair_contacts.cpp)
+constexpr std::size_t kAhead = kTouchingPrefetch;
 
-// Pairs from `begin` on: the scalar test, as the 3D mirrors' (pair_contacts.cpp).
+// Pairs from `begin` on: the scalar loop of every mirror layout (touching_pass.hpp).
 std::size_t scalar_pass(const DiscOverlapPass& p, std::size_t begin, std::size_t count) {
-  for (std::size_t k = begin; k < p.pairs; ++k) {
-    if (k + kAhead < p.pairs) __builtin_prefetch(&p.mirrors[p.second[k + kAhead]]);
-    const DiscMirror &ga = p.mirrors[p.first[k]], &gb = p.mirrors[p.second[k]];
-    const double du = ga.u - gb.u, dv = ga.v - gb.v, rsum = ga.r + gb.r;
-    const bool touch = du * du + dv * dv < rsum * rsum;
-    p.touching[count] = static_cast<std::int32_t>(k);
-    count += touch ? 1 : 0;
-    if (p.was) {
-      if (p.was[k] && !touch) p.history[3 * k] = p.history[3 * k + 1] = p.history[3 * k + 2] = 0.0;
-      p.was[k] = touch ? 1 : 0;
-    }
-  }
-  return count;
+  return find_touching_scalar(p.mirrors, p.first, p.second, begin, p.pairs, count, p.touching, p.was, p.history,
+                              [](const DiscMirror& ga, const DiscMirror& gb) {
+                                const double du = ga.u - gb.u, dv = ga.v - gb.v, rsum = ga.r + gb.r;
+                                return du * du + dv * dv < rsum * rsum;
+                              });
 }
 
 #ifdef TESSERA_DISC_AVX512

@@ -4,6 +4,7 @@
 #include <algorithm>
 
 #include "solid/disc_overlaps.hpp"
+#include "solid/touching_pass.hpp"
 
 namespace tessera {
 
@@ -40,32 +41,15 @@ struct PairContacts::SphereMirrors {  // 3D mirrors per element (spheres, shaped
     g[i] = {x[0], x[1], x[2], p.radius[i]};
     m[i] = {v[0], v[1], v[2], w[0], w[1], w[2]};
   }
-  // Pass 1, branch-free: which listed pairs touch (about half of them in a dense bed, at random,
-  // which a branch would mispredict). The compacted list keeps the canonical order.
-  // Contacts that opened since the last evaluation lose their history (T3): a pair that touched then
-  // (was) and does not now. Rare, so the branch is predicted. (was = nullptr: the springs stay.)
+  // Pass 1: the scalar loop (touching_pass.hpp) with the sphere test.
   std::size_t find_touching(const std::int32_t* first, const std::int32_t* second, std::size_t np,
                             std::int32_t* out, std::uint8_t* was, double* hist) const {
-    // Partners are scattered over ~1000 bodies, and a large bed's mirrors come from memory: pass 1
-    // spends a few ns a pair, so it looks further ahead than pass 2.
-    constexpr std::size_t ahead = 64;
-    std::size_t nt = 0;
-    for (std::size_t k = 0; k < np; ++k) {
-      if (k + ahead < np) __builtin_prefetch(&g[second[k + ahead]]);
-      out[nt] = static_cast<std::int32_t>(k);
-      const bool touch = touching(first[k], second[k]);
-      nt += touch ? 1 : 0;
-      if (was) {
-        if (was[k] && !touch) hist[3 * k] = hist[3 * k + 1] = hist[3 * k + 2] = 0.0;
-        was[k] = touch ? 1 : 0;
-      }
-    }
-    return nt;
-  }
-  bool touching(std::size_t a, std::size_t b) const {
-    const KernelGeometry &ga = g[a], &gb = g[b];
-    const double dx = ga.x - gb.x, dy = ga.y - gb.y, dz = ga.z - gb.z, rsum = ga.r + gb.r;
-    return dx * dx + dy * dy + dz * dz < rsum * rsum;
+    return find_touching_scalar(g, first, second, 0, np, 0, out, was, hist,
+                                [](const KernelGeometry& ga, const KernelGeometry& gb) {
+                                  const double dx = ga.x - gb.x, dy = ga.y - gb.y, dz = ga.z - gb.z;
+                                  const double rsum = ga.r + gb.r;
+                                  return dx * dx + dy * dy + dz * dz < rsum * rsum;
+                                });
   }
   void prefetch_partner(std::size_t b) const {
     __builtin_prefetch(&g[b]);

@@ -12,7 +12,6 @@
 #include <cstdint>
 #include <vector>
 
-#include "solid/coefficient_table.hpp"
 #include "solid/contact_entities.hpp"
 #include "solid/contact_kernel.hpp"
 #include "solid/neighbor_list.hpp"
