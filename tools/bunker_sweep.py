@@ -23,6 +23,13 @@ bars (two standard errors).
   tools/bunker_sweep.py report [--out D]
       D/release_table.csv and .md, D/fig7_ball_velocity.png, D/fig8_upward_impulse.png,
       D/fig9_release.png (contours of release angle and speed over loft and depth).
+
+Every shot is stamped with the bed it started from (`bed`: the first 16 hex digits of a SHA-256
+of the bed checkpoint's bodies and contact springs). `--prior CSV` (repeatable) takes the shots of
+an earlier release_shots.csv (another allocation, another machine, a committed table) as done and
+into the report, if they started from the same bed; shots from another bed are left out, with a
+warning. A sweep can so be finished in pieces, even on a new machine that rebuilds the bed with the
+same pipeline and build.
 """
 import argparse
 import csv
@@ -85,6 +92,54 @@ def command(args, combo, ranks):
     return cmd, out
 
 
+def bed_file(args):
+    """The case's bed checkpoint (bed.file, relative to the case's directory; --set bed.file=...)."""
+    path = None
+    for kv in args.set:
+        if kv.startswith("bed.file="):
+            return kv.split("=", 1)[1]
+    text = open(os.path.join(ROOT, args.case)).read()
+    m = re.search(r"^bed:\s*\n(?:\s+#.*\n)*\s+file:\s*([^\s#]+)", text, re.M)
+    if m:
+        path = os.path.normpath(os.path.join(os.path.dirname(os.path.join(ROOT, args.case)), m.group(1)))
+    return path
+
+
+def bed_digest(args):
+    """The bed's identity: SHA-256 of its bodies and contact springs, 16 hex digits ('' if unknown)."""
+    path = bed_file(args)
+    if not path or not os.path.isfile(path):
+        return ""
+    import hashlib
+    import h5py
+    h = hashlib.sha256()
+    with h5py.File(path, "r") as f:
+        for name in ("bodies", "pair_history", "pair_keys"):
+            if name in f:
+                h.update(f[name][()].tobytes())
+    return h.hexdigest()[:16]
+
+
+def prior_rows(args, bed):
+    """The shots of --prior CSVs that started from this bed."""
+    rows = []
+    for path in args.prior:
+        kept = other = 0
+        with open(path) as f:
+            for r in csv.DictReader(f):
+                if r.get("bed", "") != bed:
+                    other += 1
+                    continue
+                row = {k: float(r[k]) for k in ["bounce_deg", "loft_deg", "depth_mm"] + QUANTITIES + ["wall_s"]}
+                row.update(member=int(r["member"]), ball_hit_wall=r["ball_hit_wall"] == "True", bed=bed, dir=None)
+                row["name"] = job_name(row["bounce_deg"], row["loft_deg"], row["depth_mm"], row["member"])
+                rows.append(row)
+                kept += 1
+        print("bunker sweep: %s: %d shot(s) from this bed%s" % (
+            path, kept, ", %d from another bed left out" % other if other else ""))
+    return rows
+
+
 def done(out):
     try:
         return json.load(open(os.path.join(out, "summary.json")))["status"] == "completed"
@@ -94,7 +149,8 @@ def done(out):
 
 def run_local(args):
     os.makedirs(args.out, exist_ok=True)
-    pending = [c for c in jobs(args) if not done(command(args, c, args.ranks)[1])]
+    earlier = {r["name"] for r in prior_rows(args, bed_digest(args))}
+    pending = [c for c in jobs(args) if job_name(*c) not in earlier and not done(command(args, c, args.ranks)[1])]
     print("bunker sweep: %d jobs, %d to run, %d at a time on %d rank(s) each" %
           (len(jobs(args)), len(pending), args.jobs, args.ranks))
 
@@ -116,7 +172,9 @@ def run_local(args):
 
 def write_slurm(args):
     os.makedirs(args.out, exist_ok=True)
-    lines = [" ".join(shlex.quote(x) for x in command(args, c, args.ranks)[0][4:]) for c in jobs(args)]
+    earlier = {r["name"] for r in prior_rows(args, bed_digest(args))}
+    lines = [" ".join(shlex.quote(x) for x in command(args, c, args.ranks)[0][4:]) for c in jobs(args)
+             if job_name(*c) not in earlier]
     with open(os.path.join(args.out, "jobs.txt"), "w") as f:
         f.write("\n".join(lines) + "\n")
     script = """#!/bin/bash
@@ -139,7 +197,7 @@ eval srun {tessera} $line
                                                                     path))
 
 
-def load(out):
+def load(out, bed=""):
     """One row per completed shot; `member` is its place in its point's ensemble."""
     rows = []
     for name in sorted(os.listdir(out)):
@@ -158,7 +216,7 @@ def load(out):
                      "club_upward_impulse": q["club_upward_impulse"],
                      "club_angular_velocity_loss": q["club_angular_velocity_loss"],
                      "ball_hit_wall": q.get("ball_hit_wall", False), "wall_s": s["wall_seconds"],
-                     "dir": os.path.join(out, name)})
+                     "bed": bed, "dir": os.path.join(out, name)})
     return rows
 
 
@@ -187,10 +245,14 @@ def points(rows):
 
 
 def report(args):
-    rows = load(args.out)
+    bed = bed_digest(args)
+    rows = load(args.out, bed) if os.path.isdir(args.out) else []
+    here = {r["name"] for r in rows}
+    rows += [r for r in prior_rows(args, bed) if r["name"] not in here]
     if not rows:
         sys.exit("bunker sweep: no completed runs in %s" % args.out)
-    keys = ["bounce_deg", "loft_deg", "depth_mm", "member"] + QUANTITIES + ["ball_hit_wall", "wall_s"]
+    os.makedirs(args.out, exist_ok=True)
+    keys = ["bounce_deg", "loft_deg", "depth_mm", "member"] + QUANTITIES + ["ball_hit_wall", "wall_s", "bed"]
     with open(os.path.join(args.out, "release_shots.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=keys, extrasaction="ignore")
         w.writeheader()
@@ -228,14 +290,14 @@ def report(args):
                 v.append((float(row["ball_vx"]) ** 2 + float(row["ball_vz"]) ** 2) ** 0.5)
         return t, v
     # Fig. 7: the ball's speed against time in the reference shots, every ensemble member (thin).
-    ref = [p for p in pts if p["depth_mm"] == 0 and p["bounce_deg"] == args.bounce]
+    ref = [p for p in pts if p["depth_mm"] == 0 and p["bounce_deg"] == args.bounce and p["shot0"]["dir"]]
     if ref:
         fig, ax = plt.subplots(figsize=(5.5, 3.8))
         for p in sorted(ref, key=lambda p: p["loft_deg"]):
             line, = ax.plot(*trace(p["shot0"]), label="loft %g deg%s" % (
                 p["loft_deg"], " (%d shots)" % p["shots"] if p["shots"] > 1 else ""))
             for r in p["members"]:
-                if r is not p["shot0"]:
+                if r is not p["shot0"] and r["dir"]:
                     ax.plot(*trace(r), color=line.get_color(), lw=0.5, alpha=0.5)
             ax.errorbar([1e3 * p["release_time_s"]], [p["release_speed_mps"]],
                         xerr=[2e3 * p["release_time_s_stderr"]], yerr=[2 * p["release_speed_mps_stderr"]],
@@ -313,6 +375,8 @@ def main():
     ap.add_argument("--set", action="append", default=[], help="another case override for every job")
     ap.add_argument("--ensemble", type=int, default=1, help="shots at the reference point and the corners")
     ap.add_argument("--perturbation", type=float, default=2e-6, help="depth step between ensemble members (m)")
+    ap.add_argument("--prior", action="append", default=[],
+                    help="release_shots.csv of earlier shots from the same bed: done, and in the report")
     ap.add_argument("--partition", default="")
     ap.add_argument("--time", default="00:30:00")
     args = ap.parse_args()
