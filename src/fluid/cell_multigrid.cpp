@@ -33,13 +33,14 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
   std::array<int, 3> procs{int(pm), int(pn), int(pp)};
   std::array<std::vector<PetscInt>, 3> own;
   for (int d = 0; d < 3; ++d) own[d].assign(own0[d], own0[d] + procs[d]);
-  std::array<int, 3> n{int(M), int(N), int(P)}, ratio{1, 1, 1};
+  std::array<int, 3> n{int(M), int(N), int(P)};
+  std::array<std::vector<int>, 3> fine_start;  // of the level being made; empty for the finest
   DMBoundaryType bt[3];
   for (int d = 0; d < 3; ++d) bt[d] = grid.periodic(d) ? DM_BOUNDARY_PERIODIC : DM_BOUNDARY_GHOSTED;
   while (true) {
     auto L = std::make_unique<Level>();
     L->n = n;
-    L->ratio = ratio;
+    L->fine_start = fine_start;
     check(DMDACreate3d(grid.comm(), bt[0], bt[1], bt[2], DMDA_STENCIL_STAR, n[0], n[1], n[2], procs[0], procs[1],
                        procs[2], 1, 1, own[0].data(), own[1].data(), own[2].data(), &L->dm),
           "DMDACreate3d (multigrid level)");
@@ -62,19 +63,27 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
     L->b.assign(size, 0.0);
     L->r.assign(size, 0.0);
     levels_.push_back(std::move(L));
-    // Halve every direction where every rank's block (and the whole) is even and stays >= 2
-    // cells per rank (the red-black colouring needs even periodic lengths too).
-    ratio = {1, 1, 1};
+    // Pair the cells of each rank's block along every direction that can be coarsened (a block
+    // of odd length ends in a single cell); keep >= 2 cells per rank on several ranks, and
+    // uniform pairs of an even whole where periodic (the red-black colouring).
+    bool any = false;
     for (int d = 0; d < 3; ++d) {
-      bool ok = n[d] >= 4 && n[d] % 2 == 0;
-      for (PetscInt c : own[d]) ok = ok && c % 2 == 0 && c / 2 >= (procs[d] > 1 ? 2 : 1);
-      if (ok) ratio[d] = 2;
+      bool ok = n[d] >= 4 && (!grid.periodic(d) || n[d] % 2 == 0);
+      for (PetscInt c : own[d])
+        ok = ok && (c + 1) / 2 >= (procs[d] > 1 ? 2 : 1) && (!grid.periodic(d) || c % 2 == 0);
+      fine_start[d].clear();
+      int first = 0;
+      for (auto& c : own[d]) {
+        const int pairs = ok ? (int(c) + 1) / 2 : int(c);
+        for (int I = 0; I < pairs; ++I) fine_start[d].push_back(first + (ok ? 2 * I : I));
+        first += int(c);
+        c = pairs;
+      }
+      fine_start[d].push_back(first);
+      n[d] = int(fine_start[d].size()) - 1;
+      any = any || ok;
     }
-    if (ratio == std::array<int, 3>{1, 1, 1} || long(n[0]) * n[1] * n[2] <= kCoarsestCells) break;
-    for (int d = 0; d < 3; ++d) {
-      n[d] /= ratio[d];
-      for (auto& c : own[d]) c /= ratio[d];
-    }
+    if (!any || long(levels_.back()->n[0]) * levels_.back()->n[1] * levels_.back()->n[2] <= kCoarsestCells) break;
   }
 }
 
@@ -125,19 +134,28 @@ void CellMultigrid::set_coefficients(const std::vector<double>& rho, bool coarse
   for (std::size_t l = 1; coarse && l < levels_.size(); ++l) {
     Level& f = *levels_[l - 1];
     Level& C = *levels_[l];
-    const auto& r = C.ratio;
     for (int d = 0; d < 3; ++d) {
       std::array<int, 3> m = C.m;
       m[d] += 1;
+      const int nc = C.n[d];
       for_owned(C.s, m, [&](int I, int J, int K) {
-        const int base[3] = {I * r[0], J * r[1], K * r[2]};
-        int span[3] = {r[0], r[1], r[2]};
-        span[d] = 1;  // the fine faces on the coarse face's plane
+        const int idx[3] = {I, J, K};
+        int lo[3], hi[3];  // the fine faces on the coarse face's plane
+        for (int e = 0; e < 3; ++e) {
+          lo[e] = C.fine_start[e][idx[e]];
+          hi[e] = e == d ? lo[e] + 1 : C.fine_start[e][idx[e] + 1];
+        }
         double sum = 0;
-        for (int c = 0; c < span[2]; ++c)
-          for (int b = 0; b < span[1]; ++b)
-            for (int a = 0; a < span[0]; ++a) sum += f.coef[d][f.at(base[0] + a, base[1] + b, base[2] + c)];
-        C.coef[d][C.at(I, J, K)] = sum / r[d];
+        for (int c = lo[2]; c < hi[2]; ++c)
+          for (int b = lo[1]; b < hi[1]; ++b)
+            for (int a = lo[0]; a < hi[0]; ++a) sum += f.coef[d][f.at(a, b, c)];
+        // Over the distance between the coarse centres in fine cells; at a domain face, the
+        // distance from the centre to the face in fine half cells (the fine term's distance).
+        const int I0 = idx[d];
+        const double distance = !grid_.periodic(d) && (I0 == 0 || I0 == nc)
+                                    ? C.width(d, I0 == 0 ? 0 : nc - 1)
+                                    : 0.5 * (C.width(d, (I0 - 1 + nc) % nc) + C.width(d, I0 % nc));
+        C.coef[d][C.at(I, J, K)] = sum / distance;
       });
     }
   }
@@ -197,22 +215,23 @@ void CellMultigrid::cycle(std::size_t l) {
   smooth(L, pre_, false);
   residual(L);
   Level& C = *levels_[l + 1];
-  const auto& r = C.ratio;
+  // The fine cells of coarse cell (I, J, K): [fine_start[d][I], fine_start[d][I + 1]) along d.
+  const auto fine_cells = [&C](int I, int J, int K, auto&& fn) {
+    const auto& f = C.fine_start;
+    for (int c = f[2][K]; c < f[2][K + 1]; ++c)
+      for (int b = f[1][J]; b < f[1][J + 1]; ++b)
+        for (int a = f[0][I]; a < f[0][I + 1]; ++a) fn(a, b, c);
+  };
   for_owned(C.s, C.m, [&](int I, int J, int K) {
     double s = 0;
-    for (int c = 0; c < r[2]; ++c)
-      for (int b = 0; b < r[1]; ++b)
-        for (int a = 0; a < r[0]; ++a) s += L.r[L.at(I * r[0] + a, J * r[1] + b, K * r[2] + c)];
-    const std::size_t cc = C.at(I, J, K);
-    C.b[cc] = s;
+    fine_cells(I, J, K, [&](int a, int b, int c) { s += L.r[L.at(a, b, c)]; });
+    C.b[C.at(I, J, K)] = s;
   });
   std::fill(C.x.begin(), C.x.end(), 0.0);
   cycle(l + 1);
   for_owned(C.s, C.m, [&](int I, int J, int K) {
     const double e = C.x[C.at(I, J, K)];
-    for (int c = 0; c < r[2]; ++c)
-      for (int b = 0; b < r[1]; ++b)
-        for (int a = 0; a < r[0]; ++a) L.x[L.at(I * r[0] + a, J * r[1] + b, K * r[2] + c)] += e;
+    fine_cells(I, J, K, [&](int a, int b, int c) { L.x[L.at(a, b, c)] += e; });
   });
   exchange(L, L.x);
   smooth(L, post_, true);

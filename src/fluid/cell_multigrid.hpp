@@ -4,17 +4,25 @@
 //
 // The operator on every level is the 7-point flux form (A x)_c = sum_f c_f (x_c - x_nb) + e_c x_c
 // with face coefficients c_f = A_f / (h_f rho_f) and e_c the outflow (p = 0) terms. A coarse cell
-// is 2 fine cells along each direction that can be halved (semi-coarsening where not: a one-cell
-// slab keeps its one cell); a coarse face coefficient is the sum of the fine coefficients across
-// it divided by the ratio along its normal (fine cells in series), the coarse e the same. Fine
-// residuals are summed into the coarse cell (the rows are cell integrals), corrections are
-// injected back (the transpose): with red-black Gauss-Seidel smoothing, forward before and
-// reversed after the coarse correction, the V-cycle is a symmetric positive (semi-)definite
-// preconditioner, as CG needs. Red-black sweeps give the same numbers on any rank count.
+// aggregates the fine cells of one rank's block in pairs along each direction that can be coarsened;
+// a block of odd length ends in a single cell, so odd sizes coarsen too (180 -> 90 -> 45 -> 23 ->
+// 12 -> 6; ending in a triple instead took 13-14 CG iterations where pairs take 10,
+// test_cell_multigrid). A direction is not coarsened (semi-coarsening) where a rank's block would fall below 2 cells
+// (1 on one rank), or, periodic, where a block or the whole is odd (red-black colouring needs
+// even periodic lengths and uniform pairs there). A coarse face coefficient is the sum of the fine
+// coefficients across it over the distance between the two coarse centres in fine cells,
+// (w_low + w_high) / 2 for aggregates of w_low and w_high cells (fine cells in series); at a
+// domain face, over the width w of the coarse cell beside it (its centre lies w / 2 fine cells
+// from the face, a fine centre 1 / 2: the outflow term's distance; theory F9a). Fine residuals are summed into the coarse cell (the rows are cell integrals),
+// corrections are injected back (the transpose): with red-black Gauss-Seidel smoothing, forward
+// before and reversed after the coarse correction, the V-cycle is a symmetric positive
+// (semi-)definite preconditioner, as CG needs. Red-black sweeps give the same numbers on any rank
+// count (the aggregates, and so the preconditioner, follow the ranks' blocks).
 //
-// Each level lives on its own DMDA with the fine level's process grid and halved ownership ranges
-// (ghost width 1, filled by DMLocalToLocal); coarsening stops where a rank's block could not be
-// halved, and the coarsest level gets many sweeps (20 by default).
+// Each level lives on its own DMDA with the fine level's process grid and each block's aggregate
+// count as ownership ranges (ghost width 1, filled by DMLocalToLocal); coarsening stops where no
+// direction can be coarsened or below 256 cells, and the coarsest level gets many sweeps (20 by
+// default).
 #pragma once
 #include <petscdmda.h>
 
@@ -51,7 +59,10 @@ class CellMultigrid {
     bool needs_exchange = true;  // false on one rank without periodic directions: no ghosts to fill
     std::array<int, 3> n{}, s{}, m{}, gs{}, gm{};
     std::array<std::ptrdiff_t, 3> stride{};
-    std::array<int, 3> ratio{1, 1, 1};                 // to the next finer level
+    // Along each direction, the first cell of the next finer level's aggregate I, global,
+    // I = 0..n (the last entry is the finer level's size); empty on the finest level.
+    std::array<std::vector<int>, 3> fine_start;
+    int width(int d, int I) const { return fine_start[d][I + 1] - fine_start[d][I]; }
     std::array<std::vector<double>, 3> coef;           // face on the low side of each cell
     std::vector<double> inv_diag, diag_true, x, b, r;  // inv_diag: 1 for a zero row (an isolated cell)
     std::size_t at(int i, int j, int k) const {

@@ -1,0 +1,164 @@
+// SPDX-License-Identifier: MIT
+// The pressure's geometric multigrid (cell_multigrid.hpp) on grids whose sizes are odd, so that
+// coarse cells of one fine cell occur (at the end of every odd block), on 1, 2 and 4 ranks:
+// - the V-cycle is a symmetric positive definite operator (CG needs it; a restriction that is not
+//   the prolongation's transpose breaks the symmetry at round-off's 1e-16 times ~1e6);
+// - odd sizes coarsen: 45 x 45 x 33 cells get at least 4 levels (before: 1; no direction could be
+//   halved);
+// - the preconditioned CG reaches 1e-10 on a 1000:1 density field (a heavy drop and a pool, the
+//   flow's own case) in no more iterations than the even grid 44 x 44 x 32 plus 2 (measured
+//   2026-12-01: 10 and 10 on 1, 2 and 4 ranks; ending odd blocks in a triple instead: 13-14.
+//   Before odd sizes coarsened: 36 against 12), and the solution
+//   satisfies the 7-point equations (residual computed here from the densities, not by the solver)
+//   to that tolerance.
+#include <gtest/gtest.h>
+#include <mpi.h>
+#include <petscdmda.h>
+
+#include <cmath>
+#include <vector>
+
+#include "core/decomposition.hpp"
+#include "fluid/cell_multigrid.hpp"
+#include "fluid/fluid_grid.hpp"
+#include "fluid/pressure_poisson.hpp"
+
+using namespace tessera;
+
+namespace {
+
+constexpr double kL = 1.0;  // box (0, 1) x (0, 1) x (0, 0.75)
+
+struct Problem {
+  Decomposition decomp;
+  FluidGrid grid;
+  std::vector<double> rho;
+  explicit Problem(std::array<int, 3> n)
+      : decomp(MPI_COMM_WORLD, {0, 0, 0}, {kL, kL, 0.75 * kL}),
+        grid(decomp, n,
+             {{{BoundaryKind::no_slip, BoundaryKind::no_slip},
+               {BoundaryKind::free_slip, BoundaryKind::free_slip},
+               {BoundaryKind::no_slip, BoundaryKind::outflow}}}) {
+    rho.assign(grid.local_size(), 1.0);
+    for (int k = grid.gbegin(2); k < grid.gend(2); ++k)
+      for (int j = grid.gbegin(1); j < grid.gend(1); ++j)
+        for (int i = grid.gbegin(0); i < grid.gend(0); ++i) {
+          const Vec3 x = grid.centre(i, j, k);
+          const double dx = x.x - 0.45, dy = x.y - 0.55, dz = x.z - 0.5;
+          const bool drop = dx * dx + dy * dy + dz * dz < 0.15 * 0.15;
+          rho[grid.at(i, j, k)] = drop || x.z < 0.25 ? 1000.0 : 1.0;
+        }
+  }
+  // A smooth right-hand side with every scale in it, from global indices (rank independent).
+  double source(int i, int j, int k) const {
+    return std::sin(0.37 * i + 1.3 * j) * std::cos(0.71 * k + 0.2 * i) + 0.3 * std::sin(2.9 * (i + j + k));
+  }
+};
+
+double dot(Vec a, Vec b) {
+  PetscScalar d;
+  VecDot(a, b, &d);
+  return double(d);
+}
+
+TEST(CellMultigrid, OddSizesCoarsenAndTheVCycleIsSymmetricPositive) {
+  Problem P({45, 45, 33});
+  CellMultigrid mg(P.grid);
+  mg.set_coefficients(P.rho);
+  EXPECT_GE(mg.levels(), 4);
+  Vec x, y, mx, my;
+  DMCreateGlobalVector(P.grid.pressure_dm(), &x);
+  VecDuplicate(x, &y);
+  VecDuplicate(x, &mx);
+  VecDuplicate(x, &my);
+  PetscScalar *px, *py;
+  VecGetArray(x, &px);
+  VecGetArray(y, &py);
+  std::size_t n = 0;
+  const FluidGrid& g = P.grid;
+  for (int k = g.begin(2); k < g.end(2); ++k)
+    for (int j = g.begin(1); j < g.end(1); ++j)
+      for (int i = g.begin(0); i < g.end(0); ++i, ++n) {
+        px[n] = P.source(i, j, k);
+        py[n] = std::cos(0.53 * i * j + 0.11 * k) + 0.5;
+      }
+  VecRestoreArray(x, &px);
+  VecRestoreArray(y, &py);
+  mg.apply(x, mx);
+  mg.apply(y, my);
+  const double xmy = dot(x, my), mxy = dot(mx, y);
+  const double scale = std::sqrt(dot(x, mx) * dot(y, my));
+  EXPECT_GT(dot(x, mx), 0.0);
+  EXPECT_GT(dot(y, my), 0.0);
+  EXPECT_LT(std::abs(xmy - mxy), 1e-12 * scale) << xmy << " against " << mxy;
+  for (Vec* v : {&x, &y, &mx, &my}) VecDestroy(v);
+}
+
+// Solves A p = b with the multigrid-preconditioned CG; returns the iterations and checks the
+// 7-point equations' residual here.
+int solve_and_check(std::array<int, 3> n) {
+  Problem P(n);
+  const FluidGrid& g = P.grid;
+  PoissonSettings st;
+  st.rtol = 1e-10;
+  PressurePoisson poisson(g, st);
+  poisson.assemble(P.rho);
+  std::vector<double> b(g.local_size(), 0.0), p(g.local_size(), 0.0);
+  for (int k = g.begin(2); k < g.end(2); ++k)
+    for (int j = g.begin(1); j < g.end(1); ++j)
+      for (int i = g.begin(0); i < g.end(0); ++i) b[g.at(i, j, k)] = P.source(i, j, k);
+  const PoissonStats stats = poisson.solve(b, p);
+  // The neighbours' pressures: a ghost exchange on the field layout.
+  Vec global, local;
+  DMCreateGlobalVector(g.field_dm(), &global);
+  DMCreateLocalVector(g.field_dm(), &local);
+  PetscScalar* a;
+  VecGetArray(global, &a);
+  std::size_t m = 0;
+  for (int k = g.begin(2); k < g.end(2); ++k)
+    for (int j = g.begin(1); j < g.end(1); ++j)
+      for (int i = g.begin(0); i < g.end(0); ++i) a[m++] = p[g.at(i, j, k)];
+  VecRestoreArray(global, &a);
+  DMGlobalToLocal(g.field_dm(), global, INSERT_VALUES, local);
+  const PetscScalar* pl;
+  VecGetArrayRead(local, &pl);
+  const double area_over_h[3] = {g.h(1) * g.h(2) / g.h(0), g.h(0) * g.h(2) / g.h(1), g.h(0) * g.h(1) / g.h(2)};
+  double r2 = 0, b2 = 0;
+  for (int k = g.begin(2); k < g.end(2); ++k)
+    for (int j = g.begin(1); j < g.end(1); ++j)
+      for (int i = g.begin(0); i < g.end(0); ++i) {
+        const std::size_t c = g.at(i, j, k);
+        const int idx[3] = {i, j, k};
+        double ap = 0;
+        for (int d = 0; d < 3; ++d)
+          for (int side = 0; side < 2; ++side) {
+            const bool edge = side == 0 ? idx[d] == 0 : idx[d] == g.cells()[d] - 1;
+            const std::size_t nb = side == 0 ? c - g.stride(d) : c + g.stride(d);
+            if (!edge)
+              ap += area_over_h[d] / (0.5 * (P.rho[c] + P.rho[nb])) * (pl[c] - pl[nb]);
+            else if (g.boundary(d, side) == BoundaryKind::outflow)
+              ap += 2 * area_over_h[d] / P.rho[c] * pl[c];  // p = 0 on the face
+          }
+        r2 += (b[c] - ap) * (b[c] - ap);
+        b2 += b[c] * b[c];
+      }
+  VecRestoreArrayRead(local, &pl);
+  VecDestroy(&global);
+  VecDestroy(&local);
+  double sums[2] = {r2, b2}, total[2];
+  MPI_Allreduce(sums, total, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+  EXPECT_LT(std::sqrt(total[0] / total[1]), 2e-10) << n[0] << " x " << n[1] << " x " << n[2];
+  return stats.iterations;
+}
+
+TEST(CellMultigrid, OddSizesConvergeAsFastAsEvenOnes) {
+  const int odd = solve_and_check({45, 45, 33});
+  const int even = solve_and_check({44, 44, 32});
+  int rank;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  if (rank == 0) std::printf("CG iterations to 1e-10: 45 x 45 x 33 %d, 44 x 44 x 32 %d\n", odd, even);
+  EXPECT_LE(odd, even + 2);
+  EXPECT_LE(even, 30);
+}
+
+}  // namespace
