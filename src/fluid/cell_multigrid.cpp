@@ -63,6 +63,7 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
     L->b.assign(size, 0.0);
     L->r.assign(size, 0.0);
     levels_.push_back(std::move(L));
+    if (long(n[0]) * n[1] * n[2] <= kCoarsestCells) break;
     // Pair the cells of each rank's block along every direction that can be coarsened (a block
     // of odd length ends in a single cell); keep >= 2 cells per rank on several ranks, and
     // uniform pairs of an even whole where periodic (the red-black colouring).
@@ -83,7 +84,7 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
       n[d] = int(fine_start[d].size()) - 1;
       any = any || ok;
     }
-    if (!any || long(levels_.back()->n[0]) * levels_.back()->n[1] * levels_.back()->n[2] <= kCoarsestCells) break;
+    if (!any) break;
   }
 }
 
