@@ -20,6 +20,28 @@ void for_owned(const std::array<int, 3>& s, const std::array<int, 3>& m, F&& fn)
       for (int i = s[0]; i < s[0] + m[0]; ++i) fn(i, j, k);
 }
 
+// The sum of cell c's six face coefficients (an outflow face's included), in a fixed order.
+template <class Level>
+double coefficient_sum(const Level& L, std::size_t c) {
+  double s = 0;
+  for (int d = 0; d < 3; ++d) s += double(L.coef[d][c]) + double(L.coef[d][c + L.stride[d]]);
+  return s;
+}
+
+// The V-cycle's residual b - A x of cell c: A with the single-precision coefficients and the
+// smoother's own diagonal, 1 / inv_diag (0 for a zero row), so that the reversed sweeps after the
+// coarse correction are the transpose of those before it and the cycle stays symmetric.
+template <class Level>
+double residual(const Level& L, std::size_t c) {
+  const double diag = coefficient_sum(L, c) > 0 ? 1 / double(L.inv_diag[c]) : 0.0;
+  double ax = diag * L.x[c];
+  for (int d = 0; d < 3; ++d) {
+    const std::ptrdiff_t st = L.stride[d];
+    ax -= double(L.coef[d][c]) * L.x[c - st] + double(L.coef[d][c + st]) * L.x[c + st];
+  }
+  return L.b[c] - ax;
+}
+
 }  // namespace
 
 CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coarse)
@@ -41,6 +63,8 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
     auto L = std::make_unique<Level>();
     L->n = n;
     L->fine_start = fine_start;
+    for (int d = 0; d < 3 && !fine_start[d].empty(); ++d)
+      for (int I = 0; I < n[d]; ++I) L->aggregate_of[d].insert(L->aggregate_of[d].end(), L->width(d, I), I);
     check(DMDACreate3d(grid.comm(), bt[0], bt[1], bt[2], DMDA_STENCIL_STAR, n[0], n[1], n[2], procs[0], procs[1],
                        procs[2], 1, 1, own[0].data(), own[1].data(), own[2].data(), &L->dm),
           "DMDACreate3d (multigrid level)");
@@ -56,12 +80,12 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
     check(DMCreateLocalVector(L->dm, &L->scratch), "DMCreateLocalVector");
     L->needs_exchange = procs[0] * procs[1] * procs[2] > 1 || grid.periodic(0) || grid.periodic(1) || grid.periodic(2);
     const std::size_t size = std::size_t(L->gm[0]) * L->gm[1] * L->gm[2];
-    for (auto& c : L->coef) c.assign(size, 0.0);
-    L->inv_diag.assign(size, 0.0);
-    L->diag_true.assign(size, 0.0);
-    L->x.assign(size, 0.0);
+    for (auto& c : L->coef) c.assign(size, 0.0f);
+    if (levels_.empty())
+      for (auto& c : L->op_coef) c.assign(size, 0.0);
+    L->inv_diag.assign(size, 0.0f);
+    L->x.assign(size, 0.0);  // the ghosts beyond a domain face stay 0 (an outflow face's p = 0)
     L->b.assign(size, 0.0);
-    L->r.assign(size, 0.0);
     levels_.push_back(std::move(L));
     if (long(n[0]) * n[1] * n[2] <= kCoarsestCells) break;
     // Pair the cells of each rank's block along every direction that can be coarsened (a block
@@ -128,7 +152,8 @@ void CellMultigrid::set_coefficients(const std::vector<double>& rho, bool coarse
       } else {
         coef = area_over_h[d] / (0.5 * (rho[c] + rho[c - g.stride(d)]));
       }
-      F.coef[d][fc] = coef;
+      F.op_coef[d][fc] = coef;
+      F.coef[d][fc] = float(coef);
     });
   }
   // Coarse levels.
@@ -164,78 +189,89 @@ void CellMultigrid::set_coefficients(const std::vector<double>& rho, bool coarse
     Level& L = *levels_[l];
     for_owned(L.s, L.m, [&](int i, int j, int k) {
       const std::size_t c = L.at(i, j, k);
-      double s = 0;
-      for (int d = 0; d < 3; ++d) s += L.coef[d][c] + L.coef[d][c + L.stride[d]];
-      L.diag_true[c] = s;
-      L.inv_diag[c] = s > 0 ? 1 / s : 1.0;
+      const double s = coefficient_sum(L, c);
+      L.inv_diag[c] = float(s > 0 ? 1 / s : 1.0);
     });
   }
 }
 
-void CellMultigrid::smooth(Level& L, int sweeps, bool reverse) {
+void CellMultigrid::smooth(Level& L, int sweeps, bool reverse, bool from_zero, bool last_exchange) {
+  const float* const cf[3] = {L.coef[0].data(), L.coef[1].data(), L.coef[2].data()};
+  const float* const inv = L.inv_diag.data();
+  const double* const b = L.b.data();
+  double* const x = L.x.data();
+  const std::ptrdiff_t sy = L.stride[1], sz = L.stride[2];
   for (int sweep = 0; sweep < sweeps; ++sweep)
     for (int pass = 0; pass < 2; ++pass) {
       const int colour = reverse ? 1 - pass : pass;
-      for (int k = L.s[2]; k < L.s[2] + L.m[2]; ++k)
-        for (int j = L.s[1]; j < L.s[1] + L.m[1]; ++j) {
-          int i0 = L.s[0];
-          if (((i0 + j + k) & 1) != colour) ++i0;
-          for (int i = i0; i < L.s[0] + L.m[0]; i += 2) {
-            const std::size_t c = L.at(i, j, k);
-            double s = L.b[c];
-            for (int d = 0; d < 3; ++d) {
-              const std::ptrdiff_t st = L.stride[d];
-              s += L.coef[d][c] * L.x[c - st] + L.coef[d][c + st] * L.x[c + st];
-            }
-            L.x[c] = s * L.inv_diag[c];
+      if (from_zero && sweep == 0 && pass == 0) {
+        // x = 0 before: the first colour's cells take b / diag, the others stay 0; every owned
+        // cell is written, so x needs no clearing (its ghosts beyond the domain stay 0).
+        for (int k = L.s[2]; k < L.s[2] + L.m[2]; ++k)
+          for (int j = L.s[1]; j < L.s[1] + L.m[1]; ++j) {
+            const std::size_t row = L.at(L.s[0], j, k);
+            const int first = (L.s[0] + j + k) & 1;
+            for (int i = 0; i < L.m[0]; ++i)
+              x[row + i] = ((first + i) & 1) == colour ? b[row + i] * double(inv[row + i]) : 0.0;
           }
-        }
-      exchange(L, L.x);
+      } else {
+        for (int k = L.s[2]; k < L.s[2] + L.m[2]; ++k)
+          for (int j = L.s[1]; j < L.s[1] + L.m[1]; ++j) {
+            int i0 = L.s[0];
+            if (((i0 + j + k) & 1) != colour) ++i0;
+            const std::size_t end = L.at(L.s[0] + L.m[0] - 1, j, k) + 1;
+            for (std::size_t c = L.at(i0, j, k); c < end; c += 2) {
+              const double s = b[c] + double(cf[0][c]) * x[c - 1] + double(cf[0][c + 1]) * x[c + 1] +
+                               double(cf[1][c]) * x[c - sy] + double(cf[1][c + sy]) * x[c + sy] +
+                               double(cf[2][c]) * x[c - sz] + double(cf[2][c + sz]) * x[c + sz];
+              x[c] = s * double(inv[c]);
+            }
+          }
+      }
+      if (last_exchange || sweep + 1 < sweeps || pass == 0) exchange(L, L.x);
     }
 }
 
-void CellMultigrid::residual(Level& L) {
-  for_owned(L.s, L.m, [&](int i, int j, int k) {
-    const std::size_t c = L.at(i, j, k);
-    double ax = L.diag_true[c] * L.x[c];
-    for (int d = 0; d < 3; ++d) {
-      const std::ptrdiff_t st = L.stride[d];
-      ax -= L.coef[d][c] * L.x[c - st] + L.coef[d][c + st] * L.x[c + st];
+void CellMultigrid::restrict_residual(Level& L, Level& C) {
+  // The residual's rows are cell integrals: a coarse cell's right-hand side is the sum of its fine
+  // cells' residuals, taken in the fine level's storage order (a coarse cell's fine cells k, then
+  // j, then i ascending); the aggregates lie within each rank's block.
+  for_owned(C.s, C.m, [&](int I, int J, int K) { C.b[C.at(I, J, K)] = 0; });
+  const auto& agg = C.aggregate_of;
+  for (int k = L.s[2]; k < L.s[2] + L.m[2]; ++k)
+    for (int j = L.s[1]; j < L.s[1] + L.m[1]; ++j) {
+      double* const row = &C.b[C.at(C.gs[0], agg[1][j], agg[2][k])] - C.gs[0];
+      const std::size_t c0 = L.at(L.s[0], j, k);
+      for (int i = 0; i < L.m[0]; ++i) row[agg[0][L.s[0] + i]] += residual(L, c0 + i);
     }
-    L.r[c] = L.b[c] - ax;
-  });
+}
+
+void CellMultigrid::prolong(Level& C, Level& L) {
+  // Injection (the restriction's transpose): each fine cell gains its aggregate's correction.
+  const auto& agg = C.aggregate_of;
+  for (int k = L.s[2]; k < L.s[2] + L.m[2]; ++k)
+    for (int j = L.s[1]; j < L.s[1] + L.m[1]; ++j) {
+      const double* const row = &C.x[C.at(C.gs[0], agg[1][j], agg[2][k])] - C.gs[0];
+      double* const x = &L.x[L.at(L.s[0], j, k)];
+      for (int i = 0; i < L.m[0]; ++i) x[i] += row[agg[0][L.s[0] + i]];
+    }
 }
 
 void CellMultigrid::cycle(std::size_t l) {
   Level& L = *levels_[l];
   if (l + 1 == levels_.size()) {
-    smooth(L, coarse_ / 2, false);
-    smooth(L, coarse_ / 2, true);
+    smooth(L, coarse_ / 2, false, true);
+    smooth(L, coarse_ / 2, true, false, false);
     return;
   }
-  smooth(L, pre_, false);
-  residual(L);
+  smooth(L, pre_, false, true);
   Level& C = *levels_[l + 1];
-  // The fine cells of coarse cell (I, J, K): [fine_start[d][I], fine_start[d][I + 1]) along d.
-  const auto fine_cells = [&C](int I, int J, int K, auto&& fn) {
-    const auto& f = C.fine_start;
-    for (int c = f[2][K]; c < f[2][K + 1]; ++c)
-      for (int b = f[1][J]; b < f[1][J + 1]; ++b)
-        for (int a = f[0][I]; a < f[0][I + 1]; ++a) fn(a, b, c);
-  };
-  for_owned(C.s, C.m, [&](int I, int J, int K) {
-    double s = 0;
-    fine_cells(I, J, K, [&](int a, int b, int c) { s += L.r[L.at(a, b, c)]; });
-    C.b[C.at(I, J, K)] = s;
-  });
-  std::fill(C.x.begin(), C.x.end(), 0.0);
+  restrict_residual(L, C);
   cycle(l + 1);
-  for_owned(C.s, C.m, [&](int I, int J, int K) {
-    const double e = C.x[C.at(I, J, K)];
-    fine_cells(I, J, K, [&](int a, int b, int c) { L.x[L.at(a, b, c)] += e; });
-  });
+  prolong(C, L);
   exchange(L, L.x);
-  smooth(L, post_, true);
+  // The coarser level reads only owned cells of this one, and apply() copies only owned cells out.
+  smooth(L, post_, true, false, false);
 }
 
 void CellMultigrid::apply_operator(Vec xin, Vec yout) {
@@ -251,10 +287,12 @@ void CellMultigrid::apply_operator(Vec xin, Vec yout) {
   n = 0;
   for_owned(F.s, F.m, [&](int i, int j, int k) {
     const std::size_t c = F.at(i, j, k);
-    double ax = F.diag_true[c] * F.x[c];
+    double diag = 0;
+    for (int d = 0; d < 3; ++d) diag += F.op_coef[d][c] + F.op_coef[d][c + F.stride[d]];
+    double ax = diag * F.x[c];
     for (int d = 0; d < 3; ++d) {
       const std::ptrdiff_t st = F.stride[d];
-      ax -= F.coef[d][c] * F.x[c - st] + F.coef[d][c + st] * F.x[c + st];
+      ax -= F.op_coef[d][c] * F.x[c - st] + F.op_coef[d][c + st] * F.x[c + st];
     }
     out[n++] = ax;
   });
@@ -268,7 +306,6 @@ void CellMultigrid::apply(Vec xin, Vec yout) {
   std::size_t n = 0;
   for_owned(F.s, F.m, [&](int i, int j, int k) { F.b[F.at(i, j, k)] = in[n++]; });
   check(VecRestoreArrayRead(xin, &in), "VecRestoreArrayRead");
-  std::fill(F.x.begin(), F.x.end(), 0.0);
   cycle(0);
   PetscScalar* out;
   check(VecGetArray(yout, &out), "VecGetArray");

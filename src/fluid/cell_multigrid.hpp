@@ -16,7 +16,10 @@
 // from the face, a fine centre 1 / 2: the outflow term's distance; theory F9a). Fine residuals are summed into the coarse cell (the rows are cell integrals),
 // corrections are injected back (the transpose): with red-black Gauss-Seidel smoothing, forward
 // before and reversed after the coarse correction, the V-cycle is a symmetric positive
-// (semi-)definite preconditioner, as CG needs. Red-black sweeps give the same numbers on any rank
+// (semi-)definite preconditioner, as CG needs. The V-cycle reads its coefficients in single
+// precision (the smoother streams them: 4 bytes a face instead of 8; theory F9a): rounded once,
+// they are one fixed symmetric operator per level, so the cycle stays a fixed symmetric
+// preconditioner; the operator CG iterates on (apply_operator) keeps the double coefficients. Red-black sweeps give the same numbers on any rank
 // count (the aggregates, and so the preconditioner, follow the ranks' blocks).
 //
 // Each level lives on its own DMDA with the fine level's process grid and each block's aggregate
@@ -63,15 +66,27 @@ class CellMultigrid {
     // I = 0..n (the last entry is the finer level's size); empty on the finest level.
     std::array<std::vector<int>, 3> fine_start;
     int width(int d, int I) const { return fine_start[d][I + 1] - fine_start[d][I]; }
-    std::array<std::vector<double>, 3> coef;           // face on the low side of each cell
-    std::vector<double> inv_diag, diag_true, x, b, r;  // inv_diag: 1 for a zero row (an isolated cell)
+    // Along each direction, the aggregate I of each cell i of the next finer level (global).
+    std::array<std::vector<int>, 3> aggregate_of;
+    // The V-cycle's operator: the face on the low side of each cell, and the smoother's inverse
+    // diagonal (1 for a zero row, an isolated cell); single precision (theory F9a).
+    std::array<std::vector<float>, 3> coef;
+    std::vector<float> inv_diag;
+    std::vector<double> x, b;
+    // Finest level only: the operator's face coefficients in double (apply_operator).
+    std::array<std::vector<double>, 3> op_coef;
     std::size_t at(int i, int j, int k) const {
       return (std::size_t(k - gs[2]) * gm[1] + std::size_t(j - gs[1])) * gm[0] + std::size_t(i - gs[0]);
     }
   };
   void exchange(Level& L, std::vector<double>& v);
-  void smooth(Level& L, int sweeps, bool reverse);
-  void residual(Level& L);
+  // Red-black sweeps; `from_zero`: x starts at 0 (its first pass reads no neighbour); the
+  // exchange after the last pass is left out where `last_exchange` is false (no ghost is read next).
+  void smooth(Level& L, int sweeps, bool reverse, bool from_zero = false, bool last_exchange = true);
+  // The residual b - A x of level l, summed into the next coarser level's b (restriction).
+  void restrict_residual(Level& L, Level& C);
+  // The coarser level's correction added to each of its aggregate's cells (prolongation).
+  void prolong(Level& C, Level& L);
   void cycle(std::size_t l);
 
   const FluidGrid& grid_;

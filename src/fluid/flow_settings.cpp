@@ -53,8 +53,8 @@ FlowSettings FlowSettings::from_config(const ConfigNode& fluid) {
     s.poisson.petsc_options = p->text("petsc_options", "");
     s.poisson.geometric_multigrid = p->choice("preconditioner", {"multigrid", "petsc"}, "multigrid") == "multigrid";
     if (const auto mg = p->optional_section("multigrid")) {
-      s.poisson.pre_sweeps = int(mg->integer("pre_sweeps", 0, 20, s.poisson.pre_sweeps));
-      s.poisson.post_sweeps = int(mg->integer("post_sweeps", 0, 20, s.poisson.post_sweeps));
+      s.poisson.pre_sweeps = int(mg->integer("pre_sweeps", 1, 20, s.poisson.pre_sweeps));
+      s.poisson.post_sweeps = int(mg->integer("post_sweeps", 1, 20, s.poisson.post_sweeps));
       s.poisson.coarse_sweeps = int(mg->integer("coarse_sweeps", 2, 1000, s.poisson.coarse_sweeps));
       if (s.poisson.pre_sweeps != s.poisson.post_sweeps)
         mg->fail("post_sweeps", "equal to pre_sweeps (CG needs a symmetric preconditioner)");

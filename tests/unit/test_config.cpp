@@ -266,6 +266,18 @@ TEST(Config, FlowSceneSharesTheOutputKeys) {
             }),
             "");
 }
+
+// A V-cycle without smoothing is not a positive-definite preconditioner (CG stopped with
+// DIVERGED_INDEFINITE_PC at the first projection): refused before anything runs.
+TEST(Config, MultigridNeedsSmoothing) {
+  const std::string dam = std::string(TESSERA_SOURCE_DIR) + "/cases/dam_break/martin_moyce.yaml";
+  auto error = [&](const std::vector<std::string>& sets) {
+    return error_of([&] { auto s = make_scene(Config::load(dam, sets).root(), MPI_COMM_WORLD, "."); });
+  };
+  EXPECT_EQ(error({"fluid.poisson.multigrid.pre_sweeps=1", "fluid.poisson.multigrid.post_sweeps=1"}), "");
+  const std::string zero = error({"fluid.poisson.multigrid.pre_sweeps=0", "fluid.poisson.multigrid.post_sweeps=0"});
+  EXPECT_NE(zero.find("fluid.poisson.multigrid.pre_sweeps"), std::string::npos) << zero;
+}
 #endif
 
 }  // namespace
