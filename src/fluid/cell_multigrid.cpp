@@ -240,9 +240,9 @@ void CellMultigrid::restrict_residual(Level& L, Level& C) {
   const auto& agg = C.aggregate_of;
   for (int k = L.s[2]; k < L.s[2] + L.m[2]; ++k)
     for (int j = L.s[1]; j < L.s[1] + L.m[1]; ++j) {
-      double* const row = &C.b[C.at(C.gs[0], agg[1][j], agg[2][k])] - C.gs[0];
+      double* const row = &C.b[C.at(C.gs[0], agg[1][j], agg[2][k])];  // row[I - gs]: cell I
       const std::size_t c0 = L.at(L.s[0], j, k);
-      for (int i = 0; i < L.m[0]; ++i) row[agg[0][L.s[0] + i]] += residual(L, c0 + i);
+      for (int i = 0; i < L.m[0]; ++i) row[agg[0][L.s[0] + i] - C.gs[0]] += residual(L, c0 + i);
     }
 }
 
@@ -251,9 +251,9 @@ void CellMultigrid::prolong(Level& C, Level& L) {
   const auto& agg = C.aggregate_of;
   for (int k = L.s[2]; k < L.s[2] + L.m[2]; ++k)
     for (int j = L.s[1]; j < L.s[1] + L.m[1]; ++j) {
-      const double* const row = &C.x[C.at(C.gs[0], agg[1][j], agg[2][k])] - C.gs[0];
+      const double* const row = &C.x[C.at(C.gs[0], agg[1][j], agg[2][k])];  // row[I - gs]: cell I
       double* const x = &L.x[L.at(L.s[0], j, k)];
-      for (int i = 0; i < L.m[0]; ++i) x[i] += row[agg[0][L.s[0] + i]];
+      for (int i = 0; i < L.m[0]; ++i) x[i] += row[agg[0][L.s[0] + i] - C.gs[0]];
     }
 }
 
