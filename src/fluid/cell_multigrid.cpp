@@ -42,6 +42,16 @@ double residual(const Level& L, std::size_t c) {
   return L.b[c] - ax;
 }
 
+// Walks level L's owned rows in storage order, giving each row's first fine cell and the storage
+// index of the coarse row (of level C, one coarser) that holds its aggregates, counted from that
+// row's first ghost: fine cell i of the row lies in coarse cell coarse_row + aggregate_of[0][i] - gs[0].
+template <class Level, class F>
+void for_fine_rows(const Level& L, const Level& C, F&& fn) {
+  for (int k = L.s[2]; k < L.s[2] + L.m[2]; ++k)
+    for (int j = L.s[1]; j < L.s[1] + L.m[1]; ++j)
+      fn(C.at(C.gs[0], C.aggregate_of[1][j], C.aggregate_of[2][k]), L.at(L.s[0], j, k));
+}
+
 }  // namespace
 
 CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coarse)
@@ -237,24 +247,18 @@ void CellMultigrid::restrict_residual(Level& L, Level& C) {
   // cells' residuals, taken in the fine level's storage order (a coarse cell's fine cells k, then
   // j, then i ascending); the aggregates lie within each rank's block.
   for_owned(C.s, C.m, [&](int I, int J, int K) { C.b[C.at(I, J, K)] = 0; });
-  const auto& agg = C.aggregate_of;
-  for (int k = L.s[2]; k < L.s[2] + L.m[2]; ++k)
-    for (int j = L.s[1]; j < L.s[1] + L.m[1]; ++j) {
-      double* const row = &C.b[C.at(C.gs[0], agg[1][j], agg[2][k])];  // row[I - gs]: cell I
-      const std::size_t c0 = L.at(L.s[0], j, k);
-      for (int i = 0; i < L.m[0]; ++i) row[agg[0][L.s[0] + i] - C.gs[0]] += residual(L, c0 + i);
-    }
+  const int* const agg = C.aggregate_of[0].data() + L.s[0];
+  for_fine_rows(L, C, [&](std::size_t coarse_row, std::size_t c0) {
+    for (int i = 0; i < L.m[0]; ++i) C.b[coarse_row + agg[i] - C.gs[0]] += residual(L, c0 + i);
+  });
 }
 
 void CellMultigrid::prolong(Level& C, Level& L) {
   // Injection (the restriction's transpose): each fine cell gains its aggregate's correction.
-  const auto& agg = C.aggregate_of;
-  for (int k = L.s[2]; k < L.s[2] + L.m[2]; ++k)
-    for (int j = L.s[1]; j < L.s[1] + L.m[1]; ++j) {
-      const double* const row = &C.x[C.at(C.gs[0], agg[1][j], agg[2][k])];  // row[I - gs]: cell I
-      double* const x = &L.x[L.at(L.s[0], j, k)];
-      for (int i = 0; i < L.m[0]; ++i) x[i] += row[agg[0][L.s[0] + i] - C.gs[0]];
-    }
+  const int* const agg = C.aggregate_of[0].data() + L.s[0];
+  for_fine_rows(L, C, [&](std::size_t coarse_row, std::size_t c0) {
+    for (int i = 0; i < L.m[0]; ++i) L.x[c0 + i] += C.x[coarse_row + agg[i] - C.gs[0]];
+  });
 }
 
 void CellMultigrid::cycle(std::size_t l) {
