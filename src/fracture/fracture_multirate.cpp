@@ -14,7 +14,10 @@
 //   travel     (the seed, scheme b) a due element takes the sum of the impulses of its last step;
 //   stability  (scheme c) an element takes each impulse when it is made (the asynchronous
 //              variational integrator of Lew, Marsden, Ortiz & West 2003: momentum-conserving and
-//              symplectic), so a coarse element bonded to a fine one follows it without lag.
+//              symplectic), so a coarse element bonded to a fine one follows it without lag. A
+//              sub-step drifts its due elements to t (T9 for the rotation), evaluates the due pairs
+//              at those states, then kicks them: pairs read the states the elements have, with no
+//              extrapolation. Travel levels evaluate pairs on the piecewise-linear paths above.
 // Levels are chosen at each macro step, when every element is due:
 //   travel     the seed's rule: the smallest k with |v_e| dt0 / 2^k <= l (l = blast.travel_limit)
 //   stability  each element's own stable step (B9: its faces' springs and its mass and inertia)
@@ -140,6 +143,26 @@ void FractureSolver::multirate_step() {
   for (std::size_t e = 0; e < block_.size(); ++e)
     by_level[static_cast<std::size_t>(owner_[e])][static_cast<std::size_t>(kick_level[e])].push_back(static_cast<int>(e));
 
+  // Immediate impulses read each pair at its elements' states at t: a sub-step first drifts to t every
+  // element a rank reads, its own due elements and the other ranks' elements its pairs touch (these
+  // from the state their owner sent, as their owner drifts them: the same bits), then evaluates the
+  // pairs, then kicks its own.
+  auto& halo = halo_buckets_;
+  clear_buckets(halo, K + 1);
+  if (immediate && P > 1) {
+    halo_mark_.assign(block_.size(), 0);
+    auto add = [&](int e) {
+      const std::size_t i = static_cast<std::size_t>(e);
+      if (owner_[i] == rank || halo_mark_[i]) return;
+      halo_mark_[i] = 1;
+      halo[static_cast<std::size_t>(kick_level[i])].push_back(e);
+    };
+    for (const auto& level : bonds)
+      for (int b : level) add(block_.bonds[static_cast<std::size_t>(b)].master), add(block_.bonds[static_cast<std::size_t>(b)].slave);
+    for (const auto& [sa, sb] : pairs_)
+      add(spheres_[static_cast<std::size_t>(sa)].element), add(spheres_[static_cast<std::size_t>(sb)].element);
+  }
+
   const long substeps = 1L << K;
   const double h_min = dt_ / static_cast<double>(substeps);
   min_dt_ = std::min(min_dt_, h_min);
@@ -150,6 +173,13 @@ void FractureSolver::multirate_step() {
   for (long s = 0; s < substeps; ++s) {
     const double t = time_ + static_cast<double>(s) * h_min;
     const int first = s == 0 ? 0 : K - std::countr_zero(static_cast<unsigned long>(s));
+    if (immediate) {
+      auto timer = timers_.scope("kick_drift");
+      for (int k = first; k <= K; ++k) {
+        for (int e : by_level[static_cast<std::size_t>(rank)][static_cast<std::size_t>(k)]) advance_to(static_cast<std::size_t>(e), t);
+        for (int e : halo[static_cast<std::size_t>(k)]) advance_to(static_cast<std::size_t>(e), t);
+      }
+    }
     {
       auto timer = timers_.scope("bond_forces");
       for (int k = first; k <= K; ++k) {
@@ -205,8 +235,7 @@ void FractureSolver::multirate_step() {
         for (int e : by_level[static_cast<std::size_t>(rank)][static_cast<std::size_t>(k)]) {
           const std::size_t i = static_cast<std::size_t>(e);
           if (immediate) {
-            advance_to(i, t);  // drift to now, kick with what arrived now
-            kick_impulse(i);
+            kick_impulse(i);  // drifted to now before the pairs; kicked with what arrived now
           } else {
             kick_impulse(i);  // eq. 3: the impulses of the step that ends now, then the next drift
             advance_to(i, t + h);

@@ -179,7 +179,7 @@ class FractureSolver {
   void kick(double h);
   void drift();
   void exchange();
-  void exchange_elements(const std::vector<std::vector<int>>& lists);  // x, q, v, w, clock of each list's rank
+  void exchange_elements(const std::vector<std::vector<int>>& lists);  // x, q, v, w or L, clock of each list's rank
   double element_limit(std::size_t e) const;
   void choose_steps();  // dt_ and, with stability levels, each element's level (B9, B10)
   Pose pose_at(std::size_t e, double t) const;  // on its piecewise-linear path (B10)
@@ -268,6 +268,9 @@ class FractureSolver {
   // Per-level lists of the macro step (bonds, contact pairs; elements by owner), storage reused.
   std::vector<std::vector<int>> bond_buckets_, contact_buckets_;
   std::vector<std::vector<std::vector<int>>> element_buckets_;
+  // Stability levels: other ranks' elements this rank's pairs read, by the level they are updated at.
+  std::vector<std::vector<int>> halo_buckets_;
+  std::vector<char> halo_mark_;
   std::vector<Pose> pose_cache_;
   std::vector<long> pose_epoch_;
   long epoch_ = 0;
