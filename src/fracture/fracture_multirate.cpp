@@ -88,6 +88,96 @@ void FractureSolver::clear_buckets(std::vector<std::vector<int>>& buckets, int c
   for (auto& b : buckets) b.clear();
 }
 
+void FractureSolver::build_halo(int K) {
+  // Every rank lists the same cross pairs (bonds and contacts between its elements and another
+  // rank's), so what rank r sends me at a level is what I list as needed from r there: both sides
+  // order each list by element and agree on the counts without a message.
+  const int rank = decomp_.rank(), P = decomp_.size();
+  HaloLists& h = halo_;
+  clear_buckets(h.in, K + 1);
+  h.links.clear();
+  auto cross = [&](int a, int b) {  // a's and b's owners differ; the pair is listed here: one is mine
+    if (owner_[static_cast<std::size_t>(a)] != rank) std::swap(a, b);
+    if (owner_[static_cast<std::size_t>(a)] == rank) h.links.push_back({owner_[static_cast<std::size_t>(b)], a, b});
+  };
+  for (const auto& level : bond_buckets_)
+    for (int b : level) {
+      const BondGeometry& g = block_.bonds[static_cast<std::size_t>(b)];
+      if (owner_[static_cast<std::size_t>(g.master)] != owner_[static_cast<std::size_t>(g.slave)]) cross(g.master, g.slave);
+    }
+  for (const auto& [sa, sb] : pairs_) {
+    const int a = spheres_[static_cast<std::size_t>(sa)].element, b = spheres_[static_cast<std::size_t>(sb)].element;
+    if (owner_[static_cast<std::size_t>(a)] != owner_[static_cast<std::size_t>(b)]) cross(a, b);
+  }
+  // links: (other rank, my element, its element); my elements sent to each rank, its elements read.
+  h.out.resize(static_cast<std::size_t>(P)), h.from.resize(static_cast<std::size_t>(P));
+  for (int r = 0; r < P; ++r)
+    clear_buckets(h.out[static_cast<std::size_t>(r)], K + 1), clear_buckets(h.from[static_cast<std::size_t>(r)], K + 1);
+  h.neighbours.clear();
+  std::vector<std::array<int, 2>> sent, read;
+  for (const auto& l : h.links) sent.push_back({l[0], l[1]}), read.push_back({l[0], l[2]});
+  for (auto* v : {&sent, &read}) {
+    std::sort(v->begin(), v->end());
+    v->erase(std::unique(v->begin(), v->end()), v->end());
+  }
+  for (const auto& [r, e] : sent)
+    h.out[static_cast<std::size_t>(r)][static_cast<std::size_t>(kick_level_[static_cast<std::size_t>(e)])].push_back(e);
+  for (const auto& [r, e] : read) {
+    const std::size_t k = static_cast<std::size_t>(kick_level_[static_cast<std::size_t>(e)]);
+    h.from[static_cast<std::size_t>(r)][k].push_back(e);
+    h.in[k].push_back(e);
+  }
+  for (const auto& [r, e] : sent)
+    if (h.neighbours.empty() || h.neighbours.back() != r) h.neighbours.push_back(r);
+  for (const auto& [r, e] : read)
+    if (std::find(h.neighbours.begin(), h.neighbours.end(), r) == h.neighbours.end()) h.neighbours.push_back(r);
+  std::sort(h.neighbours.begin(), h.neighbours.end());
+}
+
+void FractureSolver::exchange_halo(int first, int K) {
+  // After a sub-step's kicks: to each neighbour, the states of my elements due now that its pairs
+  // read (x, q, v, L, clock, as exchange_elements packs them); from it, the same of its elements.
+  HaloLists& h = halo_;
+  const std::size_t n = h.neighbours.size();
+  h.send.resize(n), h.recv.resize(n);
+  std::vector<MPI_Request>& req = h.requests;
+  req.assign(2 * n, MPI_REQUEST_NULL);
+  for (std::size_t m = 0; m < n; ++m) {
+    const std::size_t r = static_cast<std::size_t>(h.neighbours[m]);
+    std::size_t count = 0;
+    for (int k = first; k <= K; ++k) count += h.from[r][static_cast<std::size_t>(k)].size();
+    h.recv[m].resize(count * kHaloWidth);
+    MPI_Irecv(h.recv[m].data(), static_cast<int>(h.recv[m].size()), MPI_DOUBLE, static_cast<int>(r), kHaloTag,
+              decomp_.comm(), &req[m]);
+  }
+  for (std::size_t m = 0; m < n; ++m) {
+    const std::size_t r = static_cast<std::size_t>(h.neighbours[m]);
+    std::vector<double>& buf = h.send[m];
+    buf.clear();
+    for (int k = first; k <= K; ++k)
+      for (int e : h.out[r][static_cast<std::size_t>(k)]) {
+        const std::size_t i = static_cast<std::size_t>(e);
+        buf.insert(buf.end(), {x_[i].x, x_[i].y, x_[i].z, q_[i].w, q_[i].x, q_[i].y, q_[i].z, v_[i].x, v_[i].y,
+                               v_[i].z, L_[i].x, L_[i].y, L_[i].z, t_el_[i]});
+      }
+    MPI_Isend(buf.data(), static_cast<int>(buf.size()), MPI_DOUBLE, static_cast<int>(r), kHaloTag, decomp_.comm(),
+              &req[n + m]);
+  }
+  MPI_Waitall(static_cast<int>(req.size()), req.data(), MPI_STATUSES_IGNORE);
+  for (std::size_t m = 0; m < n; ++m) {
+    const std::size_t r = static_cast<std::size_t>(h.neighbours[m]);
+    const double* s = h.recv[m].data();
+    for (int k = first; k <= K; ++k)
+      for (int e : h.from[r][static_cast<std::size_t>(k)]) {
+        const std::size_t i = static_cast<std::size_t>(e);
+        x_[i] = {s[0], s[1], s[2]}, q_[i] = {s[3], s[4], s[5], s[6]}, v_[i] = {s[7], s[8], s[9]};
+        L_[i] = {s[10], s[11], s[12]}, t_el_[i] = s[13];
+        w_[i] = spin(i, q_[i].unrotate(L_[i]));
+        s += kHaloWidth;
+      }
+  }
+}
+
 void FractureSolver::multirate_step() {
   const int rank = decomp_.rank(), P = decomp_.size();
   {
@@ -146,22 +236,11 @@ void FractureSolver::multirate_step() {
   // Immediate impulses read each pair at its elements' states at t: a sub-step first drifts to t every
   // element a rank reads, its own due elements and the other ranks' elements its pairs touch (these
   // from the state their owner sent, as their owner drifts them: the same bits), then evaluates the
-  // pairs, then kicks its own.
-  auto& halo = halo_buckets_;
-  clear_buckets(halo, K + 1);
-  if (immediate && P > 1) {
-    halo_mark_.assign(block_.size(), 0);
-    auto add = [&](int e) {
-      const std::size_t i = static_cast<std::size_t>(e);
-      if (owner_[i] == rank || halo_mark_[i]) return;
-      halo_mark_[i] = 1;
-      halo[static_cast<std::size_t>(kick_level[i])].push_back(e);
-    };
-    for (const auto& level : bonds)
-      for (int b : level) add(block_.bonds[static_cast<std::size_t>(b)].master), add(block_.bonds[static_cast<std::size_t>(b)].slave);
-    for (const auto& [sa, sb] : pairs_)
-      add(spheres_[static_cast<std::size_t>(sa)].element), add(spheres_[static_cast<std::size_t>(sb)].element);
-  }
+  // pairs, then kicks its own; only those states travel between the sub-steps (build_halo).
+  if (immediate && P > 1)
+    build_halo(K);
+  else
+    clear_buckets(halo_.in, K + 1);
 
   const long substeps = 1L << K;
   const double h_min = dt_ / static_cast<double>(substeps);
@@ -177,7 +256,7 @@ void FractureSolver::multirate_step() {
       auto timer = timers_.scope("kick_drift");
       for (int k = first; k <= K; ++k) {
         for (int e : by_level[static_cast<std::size_t>(rank)][static_cast<std::size_t>(k)]) advance_to(static_cast<std::size_t>(e), t);
-        for (int e : halo[static_cast<std::size_t>(k)]) advance_to(static_cast<std::size_t>(e), t);
+        for (int e : halo_.in[static_cast<std::size_t>(k)]) advance_to(static_cast<std::size_t>(e), t);
       }
     }
     {
@@ -245,7 +324,10 @@ void FractureSolver::multirate_step() {
         }
       }
     }
-    if (P > 1) {
+    if (P > 1 && immediate) {
+      auto timer = timers_.scope("exchange");
+      exchange_halo(first, K);
+    } else if (P > 1) {
       auto timer = timers_.scope("exchange");
       for (int r = 0; r < P; ++r) {
         auto& d = due[static_cast<std::size_t>(r)];

@@ -16,8 +16,9 @@
 // belongs to one rank (settings.partition: element_partition.hpp), which integrates it. A bond or a contact is evaluated by each rank owning one of
 // its two elements (a pair across ranks twice, with the same inputs and so the same bits), and an
 // element sums its forces in bond order, then contact order, then the hole: the results do not
-// depend on the rank count. The states travel by one all-gather per step (13 values per element):
-// enough for the seed's mesh; a halo of only the elements a rank touches is the way to large meshes.
+// depend on the rank count. The states travel by one all-gather per step (uniform steps, travel
+// levels, and the stability levels' macro step), and between the stability levels' sub-steps only
+// to the ranks whose pairs read them (the halo: build_halo, exchange_halo).
 #pragma once
 #include <mpi.h>
 
@@ -192,6 +193,8 @@ class FractureSolver {
     return q_[e].rotate({L_body.x / I.x, L_body.y / I.y, L_body.z / I.z});
   }
   void multirate_step();
+  void build_halo(int K);               // the cross pairs' elements by rank and level (every macro step)
+  void exchange_halo(int first, int K);  // the due ones' states, to and from the neighbour ranks
   static void clear_buckets(std::vector<std::vector<int>>& buckets, int count);  // at least count, all empty
   void compute_forces(double t);  // t: the time of the state (the hole's pressure)
   const Pose& pose(std::size_t e);  // the current state (cached until new_epoch())
@@ -268,9 +271,19 @@ class FractureSolver {
   // Per-level lists of the macro step (bonds, contact pairs; elements by owner), storage reused.
   std::vector<std::vector<int>> bond_buckets_, contact_buckets_;
   std::vector<std::vector<std::vector<int>>> element_buckets_;
-  // Stability levels: other ranks' elements this rank's pairs read, by the level they are updated at.
-  std::vector<std::vector<int>> halo_buckets_;
-  std::vector<char> halo_mark_;
+  // Stability levels: what travels between sub-steps (build_halo, exchange_halo).
+  struct HaloLists {
+    std::vector<std::vector<int>> in;                 // other ranks' elements my pairs read, by level
+    std::vector<std::vector<std::vector<int>>> out;   // [rank][level]: my elements its pairs read
+    std::vector<std::vector<std::vector<int>>> from;  // [rank][level]: its elements my pairs read
+    std::vector<int> neighbours;                      // ranks with either, ascending
+    std::vector<std::array<int, 3>> links;            // (rank, my element, its element) per cross pair
+    std::vector<std::vector<double>> send, recv;      // per neighbour, storage kept
+    std::vector<MPI_Request> requests;
+  };
+  static constexpr int kHaloWidth = 14;  // x, q, v, L, clock
+  static constexpr int kHaloTag = 1717;
+  HaloLists halo_;
   std::vector<Pose> pose_cache_;
   std::vector<long> pose_epoch_;
   long epoch_ = 0;
