@@ -2,6 +2,10 @@
 """The blast scene's cracks and time-step levels, seen along the borehole (the seed's Figs. 12-13).
 
 usage: tools/blast_figure.py RUN_DIR [RUN_DIR ...] --out FIGURE.png [--time T] [--labels A,B]
+                             [--window X0,X1,Y0,Y1]
+
+--window: the part of the plane drawn (m; default: every element, fragments far from the block
+included); the title then counts the elements outside it.
 
 For each run: the snapshot nearest T (default: the last); left column: the released faces (cracks)
 cut by the block's mid-depth plane, over the elements' displacement (each drawn as its shadow on
@@ -36,7 +40,9 @@ def main():
     ap.add_argument("--out", required=True)
     ap.add_argument("--time", type=float)
     ap.add_argument("--labels")
+    ap.add_argument("--window", help="X0,X1,Y0,Y1 in m")
     a = ap.parse_args()
+    window = [float(v) for v in a.window.split(",")] if a.window else None
     labels = a.labels.split(",") if a.labels else [os.path.basename(r.rstrip("/")) for r in a.runs]
     fig, axes = plt.subplots(len(a.runs), 2, figsize=(11, 5 * len(a.runs)), squeeze=False)
     for row, (run, label) in enumerate(zip(a.runs, labels)):
@@ -69,10 +75,18 @@ def main():
                 if len(pts) == 2:
                     segs.append(pts)
             ax.add_collection(LineCollection(segs, colors="crimson", linewidths=1.2))
+        outside = ""
+        if window:
+            c = nodes.mean(1)
+            n_out = int(((c[:, 0] < window[0]) | (c[:, 0] > window[1]) | (c[:, 1] < window[2]) |
+                         (c[:, 1] > window[3])).sum())
+            outside = f", {n_out} elements outside the window"
         ax.set_title(f"{label}: cracks at mid-depth, t = {1e3 * t:.3g} ms\n"
-                     f"({h['crack_nodes'].shape[0] // 3} released faces)")
+                     f"({h['crack_nodes'].shape[0] // 3} released faces{outside})")
         ax.set_aspect("equal")
         ax.autoscale()
+        if window:
+            ax.set_xlim(window[0], window[1]), ax.set_ylim(window[2], window[3])
         ax.set_xlabel("x (m)")
         ax.set_ylabel("y (m)")
         ax = axes[row][1]
@@ -82,6 +96,8 @@ def main():
         ax.set_title(f"{label}: time-step levels at t = {1e3 * t:.3g} ms")
         ax.set_aspect("equal")
         ax.autoscale()
+        if window:
+            ax.set_xlim(window[0], window[1]), ax.set_ylim(window[2], window[3])
         ax.set_xlabel("x (m)")
     fig.tight_layout()
     fig.savefig(a.out, dpi=110)
