@@ -136,7 +136,7 @@ void FractureSolver::build_halo(int K) {
 
 void FractureSolver::exchange_halo(int first, int K) {
   // After a sub-step's kicks: to each neighbour, the states of my elements due now that its pairs
-  // read (x, q, v, L, clock, as exchange_elements packs them); from it, the same of its elements.
+  // read (pack_state with L); from it, the same of its elements.
   HaloLists& h = halo_;
   const std::size_t n = h.neighbours.size();
   h.send.resize(n), h.recv.resize(n);
@@ -146,7 +146,7 @@ void FractureSolver::exchange_halo(int first, int K) {
     const std::size_t r = static_cast<std::size_t>(h.neighbours[m]);
     std::size_t count = 0;
     for (int k = first; k <= K; ++k) count += h.from[r][static_cast<std::size_t>(k)].size();
-    h.recv[m].resize(count * kHaloWidth);
+    h.recv[m].resize(count * kStateWidth);
     MPI_Irecv(h.recv[m].data(), static_cast<int>(h.recv[m].size()), MPI_DOUBLE, static_cast<int>(r), kHaloTag,
               decomp_.comm(), &req[m]);
   }
@@ -156,9 +156,8 @@ void FractureSolver::exchange_halo(int first, int K) {
     buf.clear();
     for (int k = first; k <= K; ++k)
       for (int e : h.out[r][static_cast<std::size_t>(k)]) {
-        const std::size_t i = static_cast<std::size_t>(e);
-        buf.insert(buf.end(), {x_[i].x, x_[i].y, x_[i].z, q_[i].w, q_[i].x, q_[i].y, q_[i].z, v_[i].x, v_[i].y,
-                               v_[i].z, L_[i].x, L_[i].y, L_[i].z, t_el_[i]});
+        buf.resize(buf.size() + kStateWidth);
+        pack_state(static_cast<std::size_t>(e), true, buf.data() + buf.size() - kStateWidth);
       }
     MPI_Isend(buf.data(), static_cast<int>(buf.size()), MPI_DOUBLE, static_cast<int>(r), kHaloTag, decomp_.comm(),
               &req[n + m]);
@@ -169,11 +168,8 @@ void FractureSolver::exchange_halo(int first, int K) {
     const double* s = h.recv[m].data();
     for (int k = first; k <= K; ++k)
       for (int e : h.from[r][static_cast<std::size_t>(k)]) {
-        const std::size_t i = static_cast<std::size_t>(e);
-        x_[i] = {s[0], s[1], s[2]}, q_[i] = {s[3], s[4], s[5], s[6]}, v_[i] = {s[7], s[8], s[9]};
-        L_[i] = {s[10], s[11], s[12]}, t_el_[i] = s[13];
-        w_[i] = spin(i, q_[i].unrotate(L_[i]));
-        s += kHaloWidth;
+        unpack_state(static_cast<std::size_t>(e), true, s);
+        s += kStateWidth;
       }
   }
 }

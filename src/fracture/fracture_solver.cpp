@@ -14,7 +14,6 @@ namespace tessera {
 
 namespace {
 
-constexpr int kStateWidth = 14;     // x, q, v, w (levels: L), the element's clock
 constexpr int kSyncWidth = 22;      // x, q, v, w, L, F, T
 constexpr int kBondWidth = 10;      // 3 x (slip xi, slip eta, u_max), broken
 
@@ -258,6 +257,25 @@ void FractureSolver::exchange() {
   if (decomp_.size() > 1) exchange_elements(owned_by_rank_);
 }
 
+void FractureSolver::pack_state(std::size_t i, bool momentum, double* o) const {
+  const Quaternion& q = q_[i];
+  const Vec3& r = momentum ? L_[i] : w_[i];
+  const double s[kStateWidth] = {x_[i].x, x_[i].y, x_[i].z, q.w, q.x, q.y, q.z,
+                                 v_[i].x, v_[i].y, v_[i].z, r.x, r.y, r.z, t_el_[i]};
+  std::copy(s, s + kStateWidth, o);
+}
+
+void FractureSolver::unpack_state(std::size_t i, bool momentum, const double* s) {
+  x_[i] = {s[0], s[1], s[2]}, q_[i] = {s[3], s[4], s[5], s[6]};
+  v_[i] = {s[7], s[8], s[9]}, t_el_[i] = s[13];
+  if (momentum) {
+    L_[i] = {s[10], s[11], s[12]};
+    w_[i] = spin(i, q_[i].unrotate(L_[i]));
+  } else {
+    w_[i] = {s[10], s[11], s[12]};
+  }
+}
+
 void FractureSolver::exchange_elements(const std::vector<std::vector<int>>& lists) {
   // Uniform steps send the spin w as the owner computed it. Per-element levels send the angular
   // momentum L instead: a rank drifts the other ranks' elements its pairs read (multirate_step), which
@@ -265,26 +283,8 @@ void FractureSolver::exchange_elements(const std::vector<std::vector<int>>& list
   const bool momentum = settings_.stepping != Stepping::uniform;
   all_gather_elements(
       decomp_.comm(), decomp_.rank(), lists, kStateWidth,
-      [&](int e, double* o) {
-        const std::size_t i = static_cast<std::size_t>(e);
-        const Quaternion& q = q_[i];
-        const Vec3& r = momentum ? L_[i] : w_[i];
-        const double s[kStateWidth] = {x_[i].x, x_[i].y, x_[i].z, q.w, q.x, q.y, q.z,
-                                       v_[i].x, v_[i].y, v_[i].z, r.x, r.y, r.z, t_el_[i]};
-        std::copy(s, s + kStateWidth, o);
-      },
-      [&](int e, const double* s) {
-        const std::size_t i = static_cast<std::size_t>(e);
-        x_[i] = {s[0], s[1], s[2]}, q_[i] = {s[3], s[4], s[5], s[6]};
-        v_[i] = {s[7], s[8], s[9]}, t_el_[i] = s[13];
-        if (momentum) {
-          L_[i] = {s[10], s[11], s[12]};
-          w_[i] = spin(i, q_[i].unrotate(L_[i]));
-        } else {
-          w_[i] = {s[10], s[11], s[12]};
-        }
-      },
-      gather_);
+      [&](int e, double* o) { pack_state(static_cast<std::size_t>(e), momentum, o); },
+      [&](int e, const double* s) { unpack_state(static_cast<std::size_t>(e), momentum, s); }, gather_);
 }
 
 void FractureSolver::sync_state() {

@@ -180,7 +180,12 @@ class FractureSolver {
   void kick(double h);
   void drift();
   void exchange();
-  void exchange_elements(const std::vector<std::vector<int>>& lists);  // x, q, v, w or L, clock of each list's rank
+  void exchange_elements(const std::vector<std::vector<int>>& lists);  // each list's rank's states to all
+  // An element's state as it travels: x, q, v, then w (uniform steps) or L (levels: w = spin(L) on
+  // arrival, as on the owner), then its clock.
+  static constexpr int kStateWidth = 14;
+  void pack_state(std::size_t i, bool momentum, double* o) const;
+  void unpack_state(std::size_t i, bool momentum, const double* s);
   double element_limit(std::size_t e) const;
   void choose_steps();  // dt_ and, with stability levels, each element's level (B9, B10)
   Pose pose_at(std::size_t e, double t) const;  // on its piecewise-linear path (B10)
@@ -281,7 +286,6 @@ class FractureSolver {
     std::vector<std::vector<double>> send, recv;      // per neighbour, storage kept
     std::vector<MPI_Request> requests;
   };
-  static constexpr int kHaloWidth = 14;  // x, q, v, L, clock
   static constexpr int kHaloTag = 1717;
   HaloLists halo_;
   std::vector<Pose> pose_cache_;
