@@ -95,10 +95,12 @@ void FractureSolver::build_halo(int K) {
   const int rank = decomp_.rank(), P = decomp_.size();
   HaloLists& h = halo_;
   clear_buckets(h.in, K + 1);
-  h.links.clear();
+  h.sent.clear(), h.read.clear();
   auto cross = [&](int a, int b) {  // a's and b's owners differ; the pair is listed here: one is mine
     if (owner_[static_cast<std::size_t>(a)] != rank) std::swap(a, b);
-    if (owner_[static_cast<std::size_t>(a)] == rank) h.links.push_back({owner_[static_cast<std::size_t>(b)], a, b});
+    if (owner_[static_cast<std::size_t>(a)] != rank) return;
+    const int r = owner_[static_cast<std::size_t>(b)];
+    h.sent.push_back({r, a}), h.read.push_back({r, b});
   };
   for (const auto& level : bond_buckets_)
     for (int b : level) {
@@ -109,29 +111,24 @@ void FractureSolver::build_halo(int K) {
     const int a = spheres_[static_cast<std::size_t>(sa)].element, b = spheres_[static_cast<std::size_t>(sb)].element;
     if (owner_[static_cast<std::size_t>(a)] != owner_[static_cast<std::size_t>(b)]) cross(a, b);
   }
-  // links: (other rank, my element, its element); my elements sent to each rank, its elements read.
-  h.out.resize(static_cast<std::size_t>(P)), h.from.resize(static_cast<std::size_t>(P));
-  for (int r = 0; r < P; ++r)
-    clear_buckets(h.out[static_cast<std::size_t>(r)], K + 1), clear_buckets(h.from[static_cast<std::size_t>(r)], K + 1);
-  h.neighbours.clear();
-  std::vector<std::array<int, 2>> sent, read;
-  for (const auto& l : h.links) sent.push_back({l[0], l[1]}), read.push_back({l[0], l[2]});
-  for (auto* v : {&sent, &read}) {
+  for (auto* v : {&h.sent, &h.read}) {
     std::sort(v->begin(), v->end());
     v->erase(std::unique(v->begin(), v->end()), v->end());
   }
-  for (const auto& [r, e] : sent)
+  h.out.resize(static_cast<std::size_t>(P)), h.from.resize(static_cast<std::size_t>(P));
+  for (int r = 0; r < P; ++r)
+    clear_buckets(h.out[static_cast<std::size_t>(r)], K + 1), clear_buckets(h.from[static_cast<std::size_t>(r)], K + 1);
+  // Every cross pair adds its rank to both lists: the neighbours are the ranks sent to.
+  h.neighbours.clear();
+  for (const auto& [r, e] : h.sent) {
     h.out[static_cast<std::size_t>(r)][static_cast<std::size_t>(kick_level_[static_cast<std::size_t>(e)])].push_back(e);
-  for (const auto& [r, e] : read) {
+    if (h.neighbours.empty() || h.neighbours.back() != r) h.neighbours.push_back(r);
+  }
+  for (const auto& [r, e] : h.read) {
     const std::size_t k = static_cast<std::size_t>(kick_level_[static_cast<std::size_t>(e)]);
     h.from[static_cast<std::size_t>(r)][k].push_back(e);
     h.in[k].push_back(e);
   }
-  for (const auto& [r, e] : sent)
-    if (h.neighbours.empty() || h.neighbours.back() != r) h.neighbours.push_back(r);
-  for (const auto& [r, e] : read)
-    if (std::find(h.neighbours.begin(), h.neighbours.end(), r) == h.neighbours.end()) h.neighbours.push_back(r);
-  std::sort(h.neighbours.begin(), h.neighbours.end());
 }
 
 void FractureSolver::exchange_halo(int first, int K) {

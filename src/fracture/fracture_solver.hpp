@@ -282,7 +282,7 @@ class FractureSolver {
     std::vector<std::vector<std::vector<int>>> out;   // [rank][level]: my elements its pairs read
     std::vector<std::vector<std::vector<int>>> from;  // [rank][level]: its elements my pairs read
     std::vector<int> neighbours;                      // ranks with either, ascending
-    std::vector<std::array<int, 3>> links;            // (rank, my element, its element) per cross pair
+    std::vector<std::array<int, 2>> sent, read;       // (rank, my element) and (rank, its element)
     std::vector<std::vector<double>> send, recv;      // per neighbour, storage kept
     std::vector<MPI_Request> requests;
   };
