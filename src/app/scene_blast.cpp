@@ -460,6 +460,14 @@ void BlastScene::summarise(nlohmann::json& s) {
     }
     q["crack_length"] = crack_area / (hi - lo);
   }
+  // B8a: the bonded fragments, the hole faces the gas no longer pushes, and the fastest element.
+  q["fragments"] = solver_->fragments().count();
+  if (solver_->borehole()) q["unloaded_hole_faces"] = solver_->unloaded_hole_faces();
+  double fastest = 0;
+  for (std::size_t e = 0; e < b.size(); ++e)
+    if (solver_->owns(e)) fastest = std::max(fastest, norm(solver_->v()[e]));
+  MPI_Allreduce(MPI_IN_PLACE, &fastest, 1, MPI_DOUBLE, MPI_MAX, decomp_->comm());
+  q["max_speed"] = fastest;
   q["kinetic_energy"] = en.kinetic;
   q["bond_elastic_energy"] = en.bond_elastic;
   q["contact_elastic_energy"] = en.contact_elastic;

@@ -290,13 +290,11 @@ void FractureSolver::multirate_step() {
       if (hole_) {
         const double pressure = hole_->pressure(t);
         for (int sf : hole_faces_) {
-          const SurfaceFace& f = block_.surface[static_cast<std::size_t>(sf)];
-          const std::size_t e = static_cast<std::size_t>(f.element);
-          if (owner_[e] != rank || level_[e] < first || pressure == 0) continue;
+          const std::size_t e = static_cast<std::size_t>(block_.surface[static_cast<std::size_t>(sf)].element);
+          Vec3 F, T;
+          if (owner_[e] != rank || level_[e] < first || pressure == 0 || !hole_load(sf, pressure, F, T)) continue;
           const double h = std::ldexp(dt_, -level_[e]);
-          const Vec3 arm = q_[e].rotate(f.centroid_body);
-          const Vec3 F = q_[e].rotate(f.normal_body) * (-pressure * f.area);
-          S_[e] += F * h, A_[e] += cross(arm, F) * h;
+          S_[e] += F * h, A_[e] += T * h;
         }
       }
     }

@@ -100,7 +100,22 @@ FractureSolver::FractureSolver(const Decomposition& decomp, BondedBlock block, F
       if (dot(block_.q0[e].rotate(f.normal_body), radial) < 0) hole_faces_.push_back(static_cast<int>(s));
     }
     if (hole_faces_.empty()) throw InputError("blast.borehole", "", "a hole whose surface is made of mesh faces (none lies on it)");
+    // B8a: the rock the hole took out, over the hole faces' extent along the axis.
+    double lo = 1e300, hi = -1e300;
+    for (int s : hole_faces_)
+      for (int k : block_.surface[static_cast<std::size_t>(s)].nodes) {
+        const double a = dot(block_.nodes[static_cast<std::size_t>(k)] - hole_->centre, hole_->axis);
+        lo = std::min(lo, a), hi = std::max(hi, a);
+      }
+    hole_mass_ = settings_.density * std::numbers::pi * hole_->radius * hole_->radius * (hi - lo);
+    double block_mass = 0;
+    for (double m : block_.mass) block_mass += m;
+    if (block_mass < hole_mass_)
+      throw InputError("blast.borehole.radius", std::to_string(hole_->radius),
+                       "a block heavier than the rock its hole took out (B8a: the gas pushes only fragments heavier "
+                       "than that)");
   }
+  update_fragments();
 }
 
 double FractureSolver::element_limit(std::size_t e) const {
@@ -345,6 +360,7 @@ void FractureSolver::restore(const std::vector<Vec3>& x, const std::vector<Quate
   unlisted_bonds_.clear();
   listed_spheres_ = spheres_.size();
   for (int b : list.unlisted) broken_[static_cast<std::size_t>(b)] = 1, add_spheres(b);
+  update_fragments();
   build_x_.clear(), build_q_.clear();
   if (!list.stale && list.x.size() == block_.size()) {
     // The list as the interrupted run had it (the per-element levels depend on which pairs are
@@ -473,6 +489,21 @@ void FractureSolver::share_broken() {
     add_spheres(b);
   }
   newly_broken_.clear();
+  if (!all.empty()) update_fragments();
+}
+
+void FractureSolver::update_fragments() {
+  // B8a: every rank holds every bond's state, so every rank finds the same fragments.
+  find_fragments(block_, broken_, fragments_);
+  hole_loaded_.assign(block_.size(), 0);
+  for (std::size_t e = 0; e < block_.size(); ++e)
+    hole_loaded_[e] = fragments_.mass[static_cast<std::size_t>(fragments_.label[e])] >= hole_mass_;
+}
+
+long FractureSolver::unloaded_hole_faces() const {
+  long n = 0;
+  for (int s : hole_faces_) n += !hole_loaded_[static_cast<std::size_t>(block_.surface[static_cast<std::size_t>(s)].element)];
+  return n;
 }
 
 long FractureSolver::broken_count() const {
@@ -487,13 +518,19 @@ void FractureSolver::borehole_forces(double t) {
   if (p == 0) return;
   const int rank = decomp_.rank();
   for (int s : hole_faces_) {
-    const SurfaceFace& f = block_.surface[static_cast<std::size_t>(s)];
-    const std::size_t e = static_cast<std::size_t>(f.element);
-    if (owner_[e] != rank) continue;
-    const Vec3 arm = q_[e].rotate(f.centroid_body);
-    const Vec3 F = q_[e].rotate(f.normal_body) * (-p * f.area);
-    F_[e] += F, T_[e] += cross(arm, F);
+    const std::size_t e = static_cast<std::size_t>(block_.surface[static_cast<std::size_t>(s)].element);
+    Vec3 F, T;
+    if (owner_[e] == rank && hole_load(s, p, F, T)) F_[e] += F, T_[e] += T;
   }
+}
+
+bool FractureSolver::hole_load(int s, double p, Vec3& F, Vec3& T) const {
+  const SurfaceFace& f = block_.surface[static_cast<std::size_t>(s)];
+  const std::size_t e = static_cast<std::size_t>(f.element);
+  if (!hole_loaded_[e]) return false;
+  F = q_[e].rotate(f.normal_body) * (-p * f.area);
+  T = cross(q_[e].rotate(f.centroid_body), F);
+  return true;
 }
 
 FractureEnergies FractureSolver::energies() const {

@@ -8,7 +8,7 @@
 //   contact_forces  contact spheres of broken faces and of the block's surface (B6-B7), between
 //                   elements not bonded to each other: list rebuilt when faces break or a sphere
 //                   moved more than skin/2; pairs in key order
-//   borehole        the gas pressure P(t) on the hole's faces (B8)
+//   borehole        the gas pressure P(t) on the hole's faces (B8) of fragments not free in the gas (B8a)
 //   kick            v += dt/2 F/m, L += dt/2 T
 //   broken          faces released this step are made known to every rank
 //
@@ -31,6 +31,7 @@
 #include "fracture/bonded_block.hpp"
 #include "fracture/element_partition.hpp"
 #include "fracture/face_spheres.hpp"
+#include "fracture/fragments.hpp"
 
 namespace tessera {
 
@@ -112,6 +113,11 @@ class FractureSolver {
   const FractureSettings& settings() const { return settings_; }
   const std::optional<Borehole>& borehole() const { return hole_; }
   const std::vector<int>& hole_faces() const { return hole_faces_; }  // indices into block().surface
+  // The bonded fragments now (B8a), and how many hole faces the gas no longer pushes: those of
+  // fragments lighter than the rock the hole took out (hole_mass).
+  const Fragments& fragments() const { return fragments_; }
+  double hole_mass() const { return hole_mass_; }
+  long unloaded_hole_faces() const;
   PhaseTimers& timers() { return timers_; }
   const Decomposition& decomposition() const { return decomp_; }
 
@@ -211,7 +217,11 @@ class FractureSolver {
   void bond_forces();
   void contact_forces();
   void borehole_forces(double t);
+  // B8, B8a: the gas's force on hole face s at pressure p and its torque about the element's
+  // centroid; false (none) when the face's fragment is free in the gas.
+  bool hole_load(int s, double p, Vec3& F, Vec3& T) const;
   void share_broken();
+  void update_fragments();  // fragments_ and hole_loaded_ from broken_
   void add_spheres(int bond);
   void add_surface_spheres();
   // Marks stale_ the elements whose spheres may come within reach of one not listed before
@@ -241,6 +251,9 @@ class FractureSolver {
   FractureSettings settings_;
   std::optional<Borehole> hole_;
   std::vector<int> hole_faces_;
+  double hole_mass_ = 0;           // density x the hole's volume (B8a)
+  Fragments fragments_;
+  std::vector<char> hole_loaded_;  // per element: its fragment holds the gas (B8a)
   std::vector<int> owner_;
   ElementWork work_;
   std::vector<std::vector<int>> element_bonds_;  // bonds of each element

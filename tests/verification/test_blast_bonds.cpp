@@ -16,7 +16,11 @@
 //   - per-element levels (B10): a small fast element hitting a large one on another level conserves
 //     momentum to round-off (both ways of sharing impulses); a bonded pair on levels 0 and 3 keeps
 //     its energy within a bound;
-//   - a bar shattered by a fast impact gives the same bits on 1, 2 and 4 ranks.
+//   - a bar shattered by a fast impact gives the same bits on 1, 2 and 4 ranks;
+//   - the borehole's gas (B8, B8a) on the seed's mesh at rest at the peak pressure: a wall element
+//     takes exactly -P A n on each hole face (its unstrained bonds and spheres add nothing); a
+//     fragment free in the gas (one element; two bonded elements) takes nothing, on either stepping;
+//     a block split in two through the hole keeps the gas on both halves.
 #include <gtest/gtest.h>
 #include <mpi.h>
 
@@ -25,6 +29,7 @@
 #include <vector>
 
 #include "fracture/fracture_solver.hpp"
+#include "solid/gmsh_reader.hpp"
 
 namespace tessera {
 namespace {
@@ -400,6 +405,111 @@ TEST(BondedBar, ShatteringGivesTheSameBitsOnAnyRankCount) {
     }
     for (std::size_t k = 0; k < a.bond_state().size(); ++k)
       ASSERT_EQ(a.bond_state()[k][1].u_max, b.bond_state()[k][1].u_max) << name;
+  }
+}
+
+TEST(Borehole, TheGasPushesTheWallAndNotAFragmentFreeInIt) {
+  const TetMesh mesh = read_gmsh(std::string(TESSERA_SOURCE_DIR) + "/cases/blast/block.msh");
+  Borehole hole;
+  hole.centre = {0.6, 0.5, 0}, hole.axis = {0, 0, 1}, hole.radius = 0.025;
+  for (const Stepping stepping : {Stepping::uniform, Stepping::stability}) {
+    const char* name = stepping == Stepping::uniform ? "uniform" : "stability";
+    FractureSettings s;
+    s.stepping = stepping;
+    Decomposition decomp(MPI_COMM_WORLD, {-0.01, -0.01, -0.01}, {1.01, 1.01, 0.21});
+    FractureSolver f(decomp, build_bonded_block(mesh, s.density), s, hole);
+    const BondedBlock& b = f.block();
+    const std::size_t n = b.size();
+    // Each element's hole faces' force at P0 at rest.
+    std::vector<Vec3> gas(n);
+    std::vector<double> gas_area(n, 0.0);
+    for (int sf : f.hole_faces()) {
+      const SurfaceFace& face = b.surface[static_cast<std::size_t>(sf)];
+      const std::size_t e = static_cast<std::size_t>(face.element);
+      gas[e] += b.q0[e].rotate(face.normal_body) * (-hole.p0 * face.area);
+      gas_area[e] += face.area;
+    }
+    // The split: every bond across the plane y = 0.5 through the axis. A one-element chip e1 (the
+    // first hole face's element) and a two-element chip e2 + n2 (a later hole face's element not
+    // bonded to e1, and a neighbour of it): all their other bonds broken.
+    std::vector<char> broken(b.bonds.size(), 0);
+    for (std::size_t k = 0; k < b.bonds.size(); ++k)
+      broken[k] = (b.x0[static_cast<std::size_t>(b.bonds[k].master)].y < 0.5) !=
+                  (b.x0[static_cast<std::size_t>(b.bonds[k].slave)].y < 0.5);
+    auto bonded_to = [&](int e, int g) {
+      for (const BondGeometry& bond : b.bonds)
+        if ((bond.master == e && bond.slave == g) || (bond.master == g && bond.slave == e)) return true;
+      return false;
+    };
+    const int e1 = b.surface[static_cast<std::size_t>(f.hole_faces().front())].element;
+    int e2 = -1, n2 = -1;
+    for (int sf : f.hole_faces()) {
+      const int e = b.surface[static_cast<std::size_t>(sf)].element;
+      if (e != e1 && !bonded_to(e, e1)) e2 = e;
+    }
+    ASSERT_GE(e2, 0);
+    for (std::size_t k = 0; k < b.bonds.size() && n2 < 0; ++k)
+      if (b.bonds[k].master == e2 || b.bonds[k].slave == e2) {
+        const int other = b.bonds[k].master == e2 ? b.bonds[k].slave : b.bonds[k].master;
+        if (other != e1 && !bonded_to(other, e1)) n2 = other;
+      }
+    ASSERT_GE(n2, 0);
+    for (std::size_t k = 0; k < b.bonds.size(); ++k) {
+      const int m = b.bonds[k].master, sl = b.bonds[k].slave;
+      const bool in_chip2 = (m == e2 && sl == n2) || (m == n2 && sl == e2);
+      if (m == e1 || sl == e1 || m == e2 || sl == e2 || m == n2 || sl == n2) broken[k] = !in_chip2;
+    }
+    const std::vector<Vec3> zero(n);
+    f.restore(b.x0, b.q0, zero, zero, std::vector<std::array<BondVertex, 3>>(b.bonds.size()), broken,
+              ContactListState{}, zero, zero);
+    f.set_clock(hole.rise, 0);  // P = P0
+    ASSERT_EQ(hole.pressure(hole.rise), hole.p0);
+    f.setup();
+    // The fragments: the two chips at their own masses, both halves heavier than the hole's rock.
+    const Fragments& frag = f.fragments();
+    const auto mass_of = [&](int e) { return frag.mass[static_cast<std::size_t>(frag.label[static_cast<std::size_t>(e)])]; };
+    EXPECT_EQ(mass_of(e1), b.mass[static_cast<std::size_t>(e1)]) << name;
+    EXPECT_EQ(mass_of(e2), b.mass[static_cast<std::size_t>(e2)] + b.mass[static_cast<std::size_t>(n2)]) << name;
+    EXPECT_LT(mass_of(e2), f.hole_mass()) << name;
+    int heavy = 0;
+    for (double m : frag.mass) heavy += m >= f.hole_mass();
+    EXPECT_EQ(heavy, 2) << name << ": the two halves";
+    long chip_faces = 0;
+    for (int sf : f.hole_faces()) {
+      const int e = b.surface[static_cast<std::size_t>(sf)].element;
+      chip_faces += e == e1 || e == e2 || e == n2;
+    }
+    EXPECT_EQ(f.unloaded_hole_faces(), chip_faces) << name;
+    auto chip = [&](std::size_t e) { return e == std::size_t(e1) || e == std::size_t(e2) || e == std::size_t(n2); };
+    int walls = 0;
+    if (stepping == Stepping::uniform) {
+      // The forces of the state at rest: the gas alone, on the wall's elements of both halves.
+      for (std::size_t e = 0; e < n; ++e) {
+        if (!f.owns(e) || gas_area[e] == 0) continue;
+        const double scale = hole.p0 * gas_area[e];
+        const Vec3 expect = chip(e) ? Vec3{} : gas[e];
+        EXPECT_LT(norm(f.force()[e] - expect), 1e-9 * scale) << name << ", element " << e << (chip(e) ? " (chip)" : "");
+        walls += !chip(e);
+      }
+    } else {
+      // One macro step: the gas does not move the chips; a wall element takes about its impulse.
+      f.step();
+      f.sync_state();
+      for (std::size_t e = 0; e < n; ++e) {
+        if (gas_area[e] == 0) continue;
+        const double dv = hole.p0 * gas_area[e] * f.dt() / b.mass[e];  // the gas's impulse over the macro step, per mass
+        if (chip(e)) {
+          // Its neighbours, pushed out by the gas, press on its spheres: measured 6.5e-4 dv at most.
+          EXPECT_LT(norm(f.v()[e]), 1e-2 * dv) << name << ", chip element " << e;
+        } else {
+          EXPECT_GT(norm(f.v()[e]), 0.1 * dv) << name << ", wall element " << e;
+          ++walls;
+        }
+      }
+    }
+    int all_walls = 0;
+    MPI_Allreduce(&walls, &all_walls, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+    EXPECT_GT(all_walls, 10) << name;
   }
 }
 
