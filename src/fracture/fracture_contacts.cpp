@@ -69,9 +69,9 @@ int FractureSolver::mark_stale(double horizon) {
     for (std::size_t e = 0; e < n; ++e) speed[e] = norm(v_[e]) + norm(w_[e]) * reach_[e];
     std::vector<double>& fastest = scratch_fastest_;
     fastest.assign(speed.begin(), speed.end());
-    for (const auto& [sa, sb] : pairs_) {
-      const std::size_t a = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(sa)].element);
-      const std::size_t b = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(sb)].element);
+    for (const ListedPair& lp : pairs_) {
+      const std::size_t a = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(lp.first)].element);
+      const std::size_t b = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(lp.second)].element);
       fastest[a] = std::max(fastest[a], speed[b]), fastest[b] = std::max(fastest[b], speed[a]);
     }
     const int rank = decomp_.rank();
@@ -142,7 +142,7 @@ void FractureSolver::consider_pair(int a, int b, const Vec3& pa, const Vec3& pb,
   const int rank = decomp_.rank();
   if (owner_[static_cast<std::size_t>(sa.element)] != rank && owner_[static_cast<std::size_t>(sb.element)] != rank) return;
   if (bonded(sa.element, sb.element)) return;
-  pairs_.push_back(sa.key < sb.key ? std::pair{a, b} : std::pair{b, a});
+  pairs_.push_back(sa.key < sb.key ? ListedPair{a, b} : ListedPair{b, a});
 }
 
 void FractureSolver::sort_pairs() {
@@ -211,8 +211,8 @@ void FractureSolver::count_pairs() {
   // Collective. Each element's listed pairs, from its owner (which lists all of them).
   listed_pairs_.assign(block_.size(), 0);
   const int rank = decomp_.rank();
-  for (const auto& [a, b] : pairs_)
-    for (const int s : {a, b}) {
+  for (const ListedPair& lp : pairs_)
+    for (const int s : {lp.first, lp.second}) {
       const std::size_t e = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(s)].element);
       if (owner_[e] == rank) ++listed_pairs_[e];
     }
@@ -228,7 +228,7 @@ void FractureSolver::refresh_list() {
   // most skin/2 + m_X from here, so a pair not listed stays apart until one of them is stale.
   ++list_refreshes_;
   const std::size_t n = spheres_.size();
-  std::erase_if(pairs_, [&](const std::pair<int, int>& p) {
+  std::erase_if(pairs_, [&](const ListedPair& p) {
     return stale_[static_cast<std::size_t>(spheres_[static_cast<std::size_t>(p.first)].element)] ||
            stale_[static_cast<std::size_t>(spheres_[static_cast<std::size_t>(p.second)].element)];
   });
@@ -265,13 +265,14 @@ void FractureSolver::update_list(double horizon) {
 }
 
 PairForce FractureSolver::contact_force(std::size_t pair, const Pose& pa, const Pose& pb, double h) {
-  const auto [a, b] = pairs_[pair];
+  const int a = pairs_[pair].first, b = pairs_[pair].second;
   const Sphere &sa = spheres_[static_cast<std::size_t>(a)], &sb = spheres_[static_cast<std::size_t>(b)];
   const std::size_t ea = static_cast<std::size_t>(sa.element), eb = static_cast<std::size_t>(sb.element);
   PairForce out;
   const Vec3 ca = pa.x + pa.rot(sa.centre), cb = pb.x + pb.rot(sb.centre);
   const Vec3 d = ca - cb;
   const double dist = norm(d), overlap = sa.radius + sb.radius - dist;
+  out.gap = -overlap;
   if (overlap <= 0 || dist == 0) return out;
   const double k = settings_.contact_stiffness, c = settings_.damping ? settings_.contact_damping : 0;
   const Vec3 n = d / dist;
@@ -311,8 +312,10 @@ void FractureSolver::contact_forces() {
   for (std::size_t p = 0; p < pairs_.size(); ++p) {
     const std::size_t ea = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(pairs_[p].first)].element);
     const std::size_t eb = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(pairs_[p].second)].element);
+    if (settings_.skip_apart && !may_touch(pairs_[p], ea, eb)) continue;  // B7a
     ++contact_evaluations_;
     const PairForce f = contact_force(p, pose(ea), pose(eb), dt_);
+    if (settings_.skip_apart) note_gap(pairs_[p], ea, eb, f.gap);
     if (owner_[ea] == rank) F_[ea] += f.force, T_[ea] += f.torque_j;
     if (owner_[eb] == rank) F_[eb] -= f.force, T_[eb] += f.torque_i;
   }

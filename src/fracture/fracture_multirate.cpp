@@ -52,10 +52,13 @@ FractureSolver::Pose FractureSolver::pose_at(std::size_t e, double t) const {
 void FractureSolver::advance_to(std::size_t i, double t) {
   const double h = t - t_el_[i];
   if (h > 0) {
+    const Vec3 x_old = x_[i];
+    const Quaternion q_old = q_[i];
     x_[i] += v_[i] * h;
     Vec3 Lb = q_[i].unrotate(L_[i]);
     free_rotation_step(q_[i], Lb, block_.inertia[i], h);
     L_[i] = q_[i].rotate(Lb);
+    add_travel(i, x_old, q_old);
   }
   t_el_[i] = t;
   w_[i] = spin(i, q_[i].unrotate(L_[i]));
@@ -107,8 +110,8 @@ void FractureSolver::build_halo(int K) {
       const BondGeometry& g = block_.bonds[static_cast<std::size_t>(b)];
       if (owner_[static_cast<std::size_t>(g.master)] != owner_[static_cast<std::size_t>(g.slave)]) cross(g.master, g.slave);
     }
-  for (const auto& [sa, sb] : pairs_) {
-    const int a = spheres_[static_cast<std::size_t>(sa)].element, b = spheres_[static_cast<std::size_t>(sb)].element;
+  for (const ListedPair& lp : pairs_) {
+    const int a = spheres_[static_cast<std::size_t>(lp.first)].element, b = spheres_[static_cast<std::size_t>(lp.second)].element;
     if (owner_[static_cast<std::size_t>(a)] != owner_[static_cast<std::size_t>(b)]) cross(a, b);
   }
   for (auto* v : {&h.sent, &h.read}) {
@@ -202,6 +205,7 @@ void FractureSolver::multirate_step() {
   // evaluated, so it is updated at its finest pair's level; every rank learns these levels (one
   // reduction per macro step) and with them which states travel at each sub-step.
   const bool immediate = settings_.stepping == Stepping::stability;
+  const bool skip = immediate && settings_.skip_apart;  // B7a: every pair read at states drifted to t
   std::vector<int>& kick_level = kick_level_;
   kick_level = level_;
   if (immediate) {
@@ -211,9 +215,9 @@ void FractureSolver::multirate_step() {
       const int k = std::max(level_[i], level_[j]);
       kick_level[i] = std::max(kick_level[i], k), kick_level[j] = std::max(kick_level[j], k);
     }
-    for (const auto& [sa, sb] : pairs_) {
-      const std::size_t i = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(sa)].element);
-      const std::size_t j = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(sb)].element);
+    for (const ListedPair& lp : pairs_) {
+      const std::size_t i = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(lp.first)].element);
+      const std::size_t j = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(lp.second)].element);
       const int k = std::max(level_[i], level_[j]);
       kick_level[i] = std::max(kick_level[i], k), kick_level[j] = std::max(kick_level[j], k);
     }
@@ -278,8 +282,11 @@ void FractureSolver::multirate_step() {
         for (int p : contacts[static_cast<std::size_t>(k)]) {
           const std::size_t a = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(pairs_[static_cast<std::size_t>(p)].first)].element);
           const std::size_t b = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(pairs_[static_cast<std::size_t>(p)].second)].element);
+          ListedPair& pair = pairs_[static_cast<std::size_t>(p)];
+          if (skip && !may_touch(pair, a, b)) continue;  // B7a: its force is zero
           ++contact_evaluations_;
           const PairForce f = contact_force(static_cast<std::size_t>(p), pose_at(a, t), pose_at(b, t), h);
+          if (skip) note_gap(pair, a, b, f.gap);
           if (owner_[a] == rank) S_[a] += f.force * h, A_[a] += f.torque_j * h;
           if (owner_[b] == rank) S_[b] -= f.force * h, A_[b] += f.torque_i * h;
         }

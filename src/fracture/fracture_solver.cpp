@@ -69,7 +69,7 @@ FractureSolver::FractureSolver(const Decomposition& decomp, BondedBlock block, F
   pose_cache_.resize(n), pose_epoch_.assign(n, -1);
   element_spheres_.assign(n, {});
   skin_ = 0.1 * block_.min_edge;
-  reach_.assign(n, 0.0);
+  reach_.assign(n, 0.0), travel_.assign(n, 0.0);
   for (std::size_t e = 0; e < n; ++e)
     for (const Vec3& p : block_.vertices[e]) reach_[e] = std::max(reach_[e], norm(p));
   box_lo_ = {1e300, 1e300, 1e300}, box_hi_ = {-1e300, -1e300, -1e300};
@@ -229,11 +229,14 @@ void FractureSolver::kick(double h) {
 void FractureSolver::drift() {
   for (int e : owned_by_rank_[static_cast<std::size_t>(decomp_.rank())]) {
     const std::size_t i = static_cast<std::size_t>(e);
+    const Vec3 x_old = x_[i];
+    const Quaternion q_old = q_[i];
     x_[i] += v_[i] * dt_;
     Vec3 Lb = q_[i].unrotate(L_[i]);
     free_rotation_step(q_[i], Lb, block_.inertia[i], dt_);
     L_[i] = q_[i].rotate(Lb);
     w_[i] = spin(i, Lb);
+    add_travel(i, x_old, q_old);
   }
 }
 
@@ -281,7 +284,10 @@ void FractureSolver::pack_state(std::size_t i, bool momentum, double* o) const {
 }
 
 void FractureSolver::unpack_state(std::size_t i, bool momentum, const double* s) {
+  const Vec3 x_old = x_[i];
+  const Quaternion q_old = q_[i];
   x_[i] = {s[0], s[1], s[2]}, q_[i] = {s[3], s[4], s[5], s[6]};
+  add_travel(i, x_old, q_old);
   v_[i] = {s[7], s[8], s[9]}, t_el_[i] = s[13];
   if (momentum) {
     L_[i] = {s[10], s[11], s[12]};
@@ -393,8 +399,8 @@ ContactListState FractureSolver::contact_list_state() const {
   ContactListState s{build_x_, build_q_, build_x_.empty(), {}, unlisted_bonds_, cell_radius_};
   // Every rank's pairs, each once (a pair across ranks is on both), by key.
   std::vector<long> mine;
-  for (const auto& [a, b] : pairs_)
-    mine.insert(mine.end(), {spheres_[static_cast<std::size_t>(a)].key, spheres_[static_cast<std::size_t>(b)].key});
+  for (const ListedPair& lp : pairs_)
+    mine.insert(mine.end(), {spheres_[static_cast<std::size_t>(lp.first)].key, spheres_[static_cast<std::size_t>(lp.second)].key});
   const std::vector<long> all = all_gather_concat(decomp_.comm(), mine);
   for (std::size_t k = 0; k + 1 < all.size(); k += 2) s.pairs.push_back({all[k], all[k + 1]});
   std::sort(s.pairs.begin(), s.pairs.end());
@@ -553,8 +559,8 @@ FractureEnergies FractureSolver::energies() const {
       bond += g.area / 3 * 0.5 * (law.kn * un * un + law.ks * (d0 * d0 + d1 * d1));
     }
   }
-  for (const auto& [a, b] : pairs_) {
-    const Sphere &sa = spheres_[static_cast<std::size_t>(a)], &sb = spheres_[static_cast<std::size_t>(b)];
+  for (const ListedPair& lp : pairs_) {
+    const Sphere &sa = spheres_[static_cast<std::size_t>(lp.first)], &sb = spheres_[static_cast<std::size_t>(lp.second)];
     const std::size_t ea = static_cast<std::size_t>(sa.element), eb = static_cast<std::size_t>(sb.element);
     if (owner_[ea] != rank) continue;  // each pair once: by the owner of its first sphere's element
     const double overlap =

@@ -67,6 +67,7 @@ struct FractureSettings {
   double travel_limit = 1e-8;        // l: |v| dt <= l (travel levels)
   int max_level = 30;
   bool damping = true;               // false: no dashpots (energy tests)
+  bool skip_apart = true;            // B7a: pairs that cannot touch are not evaluated (false: tests)
   Partition partition = Partition::slabs;  // which rank owns each element (element_partition.hpp)
 };
 
@@ -75,6 +76,7 @@ struct FractureSettings {
 struct PairForce {
   Vec3 force{}, torque_j{}, torque_i{};
   bool failed = false;  // bonds: a vertex reached u_f
+  double gap = 0;       // contacts: the spheres' gap (negative: the overlap)
 };
 
 // What rebuilds the contact list after a restart exactly as it was: the element poses at its last
@@ -197,6 +199,12 @@ class FractureSolver {
   Pose pose_at(std::size_t e, double t) const;  // on its piecewise-linear path (B10)
   void assign_levels();
   void advance_to(std::size_t e, double t);  // drift (x, q) from its clock to t
+  // B7a: adds to travel_[e] how far any point of element e can have moved since its state
+  // (x, q) was (x_old, q_old): the centroid's move and its farthest vertex's chord.
+  void add_travel(std::size_t e, const Vec3& x_old, const Quaternion& q_old) {
+    const Quaternion d = q_[e] * Quaternion{q_old.w, -q_old.x, -q_old.y, -q_old.z};
+    travel_[e] += norm(x_[e] - x_old) + 2 * reach_[e] * std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+  }
   void kick_impulse(std::size_t e);          // v += S / m, L += A
   // The world angular velocity of element e at its orientation, from its body-frame momentum.
   Vec3 spin(std::size_t e, const Vec3& L_body) const {
@@ -264,13 +272,29 @@ class FractureSolver {
   std::vector<char> broken_;
   std::vector<int> newly_broken_;  // this step, bonds whose master this rank owns
   std::vector<Sphere> spheres_;
-  std::vector<std::pair<int, int>> pairs_;
+  // A listed pair of spheres (first's key < second's) and, for B7a, the travel sum of its two
+  // elements below which it cannot touch (-inf: evaluate it); kept with the pair as the list changes.
+  struct ListedPair {
+    int first = 0, second = 0;
+    double budget = -1e300;
+  };
+  std::vector<ListedPair> pairs_;
+  // B7a: a pair whose elements have not together travelled the gap it had when last evaluated
+  // cannot touch (its force is zero: skipping it gives the same bits); note_gap records that gap.
+  bool may_touch(const ListedPair& p, std::size_t a, std::size_t b) const { return travel_[a] + travel_[b] >= p.budget; }
+  void note_gap(ListedPair& p, std::size_t a, std::size_t b, double gap) const {
+    p.budget = gap > kGapMargin ? travel_[a] + travel_[b] + gap - kGapMargin : -1e300;
+  }
   std::vector<int> listed_pairs_;  // per element: its listed pairs (every rank alike; B7's split)
   std::vector<Vec3> build_x_;
   std::vector<Quaternion> build_q_;
   double max_radius_ = 0, skin_ = 0;
   std::vector<double> reach_;  // each element's farthest vertex from its centroid
   std::vector<double> moved_;  // each element's travel since its spheres were last searched
+  // B7a (stability levels): each element's travel so far, a bound summed over every change of its
+  // pose on this rank (the pairs' budgets are in pairs_).
+  std::vector<double> travel_;
+  static constexpr double kGapMargin = 1e-12;  // m: far above the round-off of positions near 1 m
   std::vector<char> stale_;
   // Storage mark_stale and refresh_list reuse every macro step (speeds, partners' fastest, positions).
   std::vector<double> scratch_speed_, scratch_fastest_;
