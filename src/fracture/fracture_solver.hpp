@@ -7,7 +7,8 @@
 //   bond_forces     intact bonds touching an owned element (B2-B5), in bond order
 //   contact_forces  contact spheres of broken faces and of the block's surface (B6-B7), between
 //                   elements not bonded to each other: list rebuilt when faces break or a sphere
-//                   moved more than skin/2; pairs in key order
+//                   moved more than skin/2; pairs in key order; a pair that cannot touch yet
+//                   is skipped (B7a)
 //   borehole        the gas pressure P(t) on the hole's faces (B8) of fragments not free in the gas (B8a)
 //   kick            v += dt/2 F/m, L += dt/2 T
 //   broken          faces released this step are made known to every rank
