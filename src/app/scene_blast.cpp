@@ -49,6 +49,7 @@ FractureSettings read_fracture_settings(const ConfigNode& blast) {
     s.contact_damping = c->real("damping", Dim::damping, Range::non_negative(), s.contact_damping);
     s.contact_friction = c->real("friction", Dim::none, Range::non_negative(), s.contact_friction);
     s.sphere_divisions = static_cast<int>(c->integer("sphere_divisions", 3, 20, s.sphere_divisions));
+    s.relax_born_overlaps = c->flag("relax_born_overlaps", s.relax_born_overlaps);  // B7b
   }
   if (blast.has("time_step")) s.time_step = blast.real("time_step", Dim::time, Range::positive());
   s.stability_factor = blast.real("stability_factor", Dim::none, Range::half_open(0, 1), s.stability_factor);
@@ -362,6 +363,11 @@ void BlastScene::write_checkpoint(const std::string& path) {
     f.write_rows("contact_list_pairs", pairs.data(), root ? pairs.size() / 2 : 0, 2);
     f.write_rows("contact_list_unlisted", unlisted.data(), root ? unlisted.size() : 0, 1);
     f.set_attribute("contact_list_cell_radius", list.cell_radius);
+    std::vector<std::int64_t> sunk_keys;  // B7b: the pairs born overlapping and their depths now
+    std::vector<double> sunk_depths;
+    for (const auto& [k, d] : list.sunk) sunk_keys.insert(sunk_keys.end(), {k.first, k.second}), sunk_depths.push_back(d);
+    f.write_rows("contact_sunk_keys", sunk_keys.data(), root ? sunk_depths.size() : 0, 2);
+    f.write_rows("contact_sunk_depths", sunk_depths.data(), root ? sunk_depths.size() : 0, 1);
     f.write_rows("bonds", bonds.data(), nb, 10);
     std::vector<std::int64_t> order(b.mesh_index.begin(), b.mesh_index.begin() + static_cast<std::ptrdiff_t>(n));
     f.write_rows("mesh_index", order.data(), n, 1);  // the element order the rows follow
@@ -424,6 +430,11 @@ void BlastScene::read_checkpoint(const std::string& path) {
       list.cell_radius = f.attribute_double("contact_list_cell_radius");
     }
   }
+  if (f.has("contact_sunk_keys")) {  // B7b (checkpoints from before 2026-12-02 have none)
+    const std::vector<std::int64_t> keys = f.read_all<std::int64_t>("contact_sunk_keys", cols);
+    const std::vector<double> depths = f.read_all<double>("contact_sunk_depths", cols);
+    for (std::size_t k = 0; k < depths.size(); ++k) list.sunk.push_back({{keys[2 * k], keys[2 * k + 1]}, depths[k]});
+  }
   solver_->restore(x, q, v, L, bs, broken, list, F, T);
   solver_->set_clock(f.attribute_double("time"), f.attribute_long("steps"));
   probe_displacement_ = f.attribute_double("probe_displacement");
@@ -468,6 +479,8 @@ void BlastScene::summarise(nlohmann::json& s) {
     if (solver_->owns(e)) fastest = std::max(fastest, norm(solver_->v()[e]));
   MPI_Allreduce(MPI_IN_PLACE, &fastest, 1, MPI_DOUBLE, MPI_MAX, decomp_->comm());
   q["max_speed"] = fastest;
+  q["born_overlaps"] = solver_->born_overlaps();  // B7b
+  q["deepest_born_overlap"] = solver_->deepest_born_overlap();
   q["kinetic_energy"] = en.kinetic;
   q["bond_elastic_energy"] = en.bond_elastic;
   q["contact_elastic_energy"] = en.contact_elastic;

@@ -134,15 +134,48 @@ Vec3 FractureSolver::sphere_position(std::size_t s) const {
   return x_[e] + q_[e].rotate(spheres_[s].centre);
 }
 
-void FractureSolver::consider_pair(int a, int b, const Vec3& pa, const Vec3& pb, double margin) {
+void FractureSolver::consider_pair(int a, int b, const Vec3& pa, const Vec3& pb, double margin, bool born) {
   const Sphere &sa = spheres_[static_cast<std::size_t>(a)], &sb = spheres_[static_cast<std::size_t>(b)];
   // The cheap tests first: most candidates are out of reach.
   const double reach = sa.radius + sb.radius + skin_ + margin;
-  if (norm2(pa - pb) >= reach * reach || sa.element == sb.element) return;
+  const double d2 = norm2(pa - pb);
+  if (d2 >= reach * reach || sa.element == sb.element) return;
   const int rank = decomp_.rank();
-  if (owner_[static_cast<std::size_t>(sa.element)] != rank && owner_[static_cast<std::size_t>(sb.element)] != rank) return;
+  const bool own_a = owner_[static_cast<std::size_t>(sa.element)] == rank;
+  if (!own_a && owner_[static_cast<std::size_t>(sb.element)] != rank) return;
   if (bonded(sa.element, sb.element)) return;
-  pairs_.push_back(sa.key < sb.key ? ListedPair{a, b} : ListedPair{b, a});
+  ListedPair p = sa.key < sb.key ? ListedPair{a, b} : ListedPair{b, a};
+  const double overlap = sa.radius + sb.radius - std::sqrt(d2);
+  if (overlap > 0 && !sunk_.empty()) {
+    const auto it = sunk_.find({std::min(sa.key, sb.key), std::max(sa.key, sb.key)});
+    if (it != sunk_.end()) p.sunk = it->second;
+  }
+  if (overlap > 0 && born && settings_.relax_born_overlaps && p.sunk == 0 && born_at_release(a, b)) {
+    // B7b: born overlapping at a release; the pair's force starts from here.
+    set_sunk(p, overlap);
+    if (own_a) ++born_overlaps_, deepest_born_ = std::max(deepest_born_, overlap);
+  }
+  pairs_.push_back(p);
+}
+
+bool FractureSolver::born_at_release(int a, int b) const {
+  if (static_cast<std::size_t>(a) >= listed_spheres_ || static_cast<std::size_t>(b) >= listed_spheres_) return true;
+  const int ea = spheres_[static_cast<std::size_t>(a)].element, eb = spheres_[static_cast<std::size_t>(b)].element;
+  for (int bond : unlisted_bonds_) {
+    const BondGeometry& g = block_.bonds[static_cast<std::size_t>(bond)];
+    if ((g.master == ea && g.slave == eb) || (g.master == eb && g.slave == ea)) return true;
+  }
+  return false;
+}
+
+void FractureSolver::set_sunk(ListedPair& p, double depth) {
+  // Every rank that lists the pair evaluates it at the same states, so every copy agrees.
+  p.sunk = depth;
+  const long ka = spheres_[static_cast<std::size_t>(p.first)].key, kb = spheres_[static_cast<std::size_t>(p.second)].key;
+  if (depth > 0)
+    sunk_[{ka, kb}] = depth;
+  else
+    sunk_.erase({ka, kb});
 }
 
 void FractureSolver::sort_pairs() {
@@ -157,8 +190,6 @@ void FractureSolver::sort_pairs() {
 void FractureSolver::build_list() {
   ++list_builds_;
   pairs_.clear();
-  unlisted_bonds_.clear();
-  listed_spheres_ = spheres_.size();
   build_x_ = x_, build_q_ = q_;
   const std::size_t n = spheres_.size();
   std::vector<Vec3>& at = scratch_at_;
@@ -172,9 +203,11 @@ void FractureSolver::build_list() {
     const Vec3& p = at[a];
     const int ia = static_cast<int>(a);
     for_near(p, 1, [&](int b) {
-      if (b > ia) consider_pair(ia, b, p, at[static_cast<std::size_t>(b)]);
+      if (b > ia) consider_pair(ia, b, p, at[static_cast<std::size_t>(b)], 0, true);
     });
   }
+  unlisted_bonds_.clear();
+  listed_spheres_ = n;
   sort_pairs();
   count_pairs();
 }
@@ -187,7 +220,7 @@ void FractureSolver::extend_list() {
   const std::size_t n = spheres_.size();
   for (std::size_t a = listed_spheres_; a < n; ++a) {
     const Vec3 p = sphere_position(a);
-    for_near(p, 2, [&](int b) { consider_pair(static_cast<int>(a), b, p, sphere_position(static_cast<std::size_t>(b))); });
+    for_near(p, 2, [&](int b) { consider_pair(static_cast<int>(a), b, p, sphere_position(static_cast<std::size_t>(b)), 0, true); });
     insert_cell(static_cast<int>(a), p);
   }
   for (int bond : unlisted_bonds_) {
@@ -196,7 +229,7 @@ void FractureSolver::extend_list() {
       if (static_cast<std::size_t>(a) >= listed_spheres_) continue;
       const Vec3 pa = sphere_position(static_cast<std::size_t>(a));
       for (int b : element_spheres_[static_cast<std::size_t>(g.slave)])
-        if (static_cast<std::size_t>(b) < listed_spheres_) consider_pair(a, b, pa, sphere_position(static_cast<std::size_t>(b)));
+        if (static_cast<std::size_t>(b) < listed_spheres_) consider_pair(a, b, pa, sphere_position(static_cast<std::size_t>(b)), 0, true);
     }
   }
   // A pair of two elements whose bond broke is listed once: two older bonds between the same two
@@ -273,7 +306,11 @@ PairForce FractureSolver::contact_force(std::size_t pair, const Pose& pa, const 
   const Vec3 d = ca - cb;
   const double dist = norm(d), overlap = sa.radius + sb.radius - dist;
   out.gap = -overlap;
-  if (overlap <= 0 || dist == 0) return out;
+  // B7b: a pair born overlapping pushes only beyond its sunk depth, which follows it as it opens.
+  ListedPair& lp = pairs_[pair];
+  if (lp.sunk > 0 && overlap < lp.sunk) set_sunk(lp, std::max(0.0, overlap));
+  const double depth = overlap - lp.sunk;
+  if (depth <= 0 || dist == 0) return out;
   const double k = settings_.contact_stiffness, c = settings_.damping ? settings_.contact_damping : 0;
   const Vec3 n = d / dist;
   const Vec3 cp = cb + n * (sb.radius - 0.5 * overlap);
@@ -294,7 +331,7 @@ PairForce FractureSolver::contact_force(std::size_t pair, const Pose& pa, const 
     return side(pa, ea, arm_a) + side(pb, eb, arm_b);
   };
   const double c_eff = c / (1 + c * h * mobility(n));
-  const double fn = std::max(0.0, k * overlap - c_eff * vn);
+  const double fn = std::max(0.0, k * depth - c_eff * vn);
   Vec3 F = n * fn;
   const Vec3 vt = vrel - n * vn;
   const double st = norm(vt);

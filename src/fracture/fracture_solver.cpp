@@ -353,6 +353,8 @@ void FractureSolver::restore(const std::vector<Vec3>& x, const std::vector<Quate
   bond_state_ = bonds;
   F_ = F, T_ = T;
   spheres_.clear(), pairs_.clear(), unlisted_bonds_.clear();
+  sunk_.clear();
+  for (const auto& [keys, depth] : list.sunk) sunk_[keys] = depth;  // B7b
   element_spheres_.assign(block_.size(), {});
   max_radius_ = 0;
   add_surface_spheres();
@@ -386,8 +388,10 @@ void FractureSolver::restore(const std::vector<Vec3>& x, const std::vector<Quate
     for (const auto& [ka, kb] : list.pairs) {
       const int a = by_key.at(ka), b = by_key.at(kb);
       if (owner_[static_cast<std::size_t>(spheres_[static_cast<std::size_t>(a)].element)] == rank ||
-          owner_[static_cast<std::size_t>(spheres_[static_cast<std::size_t>(b)].element)] == rank)
-        pairs_.push_back({a, b});
+          owner_[static_cast<std::size_t>(spheres_[static_cast<std::size_t>(b)].element)] == rank) {
+        const auto it = sunk_.find({ka, kb});
+        pairs_.push_back({a, b, -1e300, it == sunk_.end() ? 0.0 : it->second});
+      }
     }
     sort_pairs();
   }
@@ -396,7 +400,7 @@ void FractureSolver::restore(const std::vector<Vec3>& x, const std::vector<Quate
 }
 
 ContactListState FractureSolver::contact_list_state() const {
-  ContactListState s{build_x_, build_q_, build_x_.empty(), {}, unlisted_bonds_, cell_radius_};
+  ContactListState s{build_x_, build_q_, build_x_.empty(), {}, unlisted_bonds_, cell_radius_, {}};
   // Every rank's pairs, each once (a pair across ranks is on both), by key.
   std::vector<long> mine;
   for (const ListedPair& lp : pairs_)
@@ -405,8 +409,35 @@ ContactListState FractureSolver::contact_list_state() const {
   for (std::size_t k = 0; k + 1 < all.size(); k += 2) s.pairs.push_back({all[k], all[k + 1]});
   std::sort(s.pairs.begin(), s.pairs.end());
   s.pairs.erase(std::unique(s.pairs.begin(), s.pairs.end()), s.pairs.end());
+  s.sunk = all_sunk();
   return s;
 }
+
+std::vector<std::pair<std::pair<long, long>, double>> FractureSolver::all_sunk() const {
+  // B7b: every rank's sunk pairs, each once (the ranks that hold a pair hold the same depth).
+  std::vector<long> keys;
+  std::vector<double> depths;
+  for (const auto& [k, d] : sunk_) keys.insert(keys.end(), {k.first, k.second}), depths.push_back(d);
+  const std::vector<long> all_keys = all_gather_concat(decomp_.comm(), keys);
+  const std::vector<double> all_depths = all_gather_concat(decomp_.comm(), depths);
+  std::map<std::pair<long, long>, double> merged;
+  for (std::size_t k = 0; k < all_depths.size(); ++k) merged[{all_keys[2 * k], all_keys[2 * k + 1]}] = all_depths[k];
+  return {merged.begin(), merged.end()};
+}
+
+long FractureSolver::born_overlaps() const {
+  long n = born_overlaps_;
+  MPI_Allreduce(MPI_IN_PLACE, &n, 1, MPI_LONG, MPI_SUM, decomp_.comm());
+  return n;
+}
+
+double FractureSolver::deepest_born_overlap() const {
+  double d = deepest_born_;
+  MPI_Allreduce(MPI_IN_PLACE, &d, 1, MPI_DOUBLE, MPI_MAX, decomp_.comm());
+  return d;
+}
+
+std::size_t FractureSolver::sunk_pairs() const { return all_sunk().size(); }
 
 FractureSolver::Pose FractureSolver::make_pose(const Vec3& x, const Vec3& v, const Vec3& w, const Quaternion& q) {
   const double xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z, xy = q.x * q.y, xz = q.x * q.z, yz = q.y * q.z,
@@ -564,8 +595,8 @@ FractureEnergies FractureSolver::energies() const {
     const std::size_t ea = static_cast<std::size_t>(sa.element), eb = static_cast<std::size_t>(sb.element);
     if (owner_[ea] != rank) continue;  // each pair once: by the owner of its first sphere's element
     const double overlap =
-        sa.radius + sb.radius - norm(x_[ea] + q_[ea].rotate(sa.centre) - x_[eb] - q_[eb].rotate(sb.centre));
-    if (overlap > 0) contact += 0.5 * settings_.contact_stiffness * overlap * overlap;
+        sa.radius + sb.radius - norm(x_[ea] + q_[ea].rotate(sa.centre) - x_[eb] - q_[eb].rotate(sb.centre)) - lp.sunk;
+    if (overlap > 0) contact += 0.5 * settings_.contact_stiffness * overlap * overlap;  // beyond the sunk depth (B7b)
   }
   std::array<ExactSum, 3> sums{kin, bond, contact};
   ExactSum::all_reduce(sums, decomp_.comm());

@@ -23,6 +23,7 @@
 #pragma once
 #include <mpi.h>
 
+#include <map>
 #include <optional>
 #include <vector>
 
@@ -69,6 +70,7 @@ struct FractureSettings {
   int max_level = 30;
   bool damping = true;               // false: no dashpots (energy tests)
   bool skip_apart = true;            // B7a: pairs that cannot touch are not evaluated (false: tests)
+  bool relax_born_overlaps = true;   // B7b: a pair listed at a release starts from its overlap then
   Partition partition = Partition::slabs;  // which rank owns each element (element_partition.hpp)
 };
 
@@ -89,6 +91,7 @@ struct ContactListState {
   std::vector<std::pair<long, long>> pairs;  // every listed pair (all ranks), by sphere key
   std::vector<int> unlisted;                 // faces released since the list was last made, in order
   double cell_radius = 0;                    // the largest sphere radius at the last build
+  std::vector<std::pair<std::pair<long, long>, double>> sunk;  // B7b: pairs born overlapping, by key
 };
 
 struct FractureEnergies {
@@ -164,6 +167,11 @@ class FractureSolver {
   long element_steps() const { return element_steps_; }  // this rank
   long list_builds() const { return list_builds_; }
   long list_refreshes() const { return list_refreshes_; }  // searches of the stale elements only
+  // B7b: pairs listed overlapping at a release so far, the deepest such overlap, and the pairs that
+  // still have a sunk depth (collective, every rank's once).
+  long born_overlaps() const;
+  double deepest_born_overlap() const;
+  std::size_t sunk_pairs() const;
   std::size_t sphere_count() const { return spheres_.size(); }
   std::size_t pair_count() const { return pairs_.size(); }
   // Each element's force at the last evaluation (uniform stepping; current on its owner).
@@ -242,7 +250,11 @@ class FractureSolver {
   void extend_list();               // the spheres and unbonded pairs of faces released since
   void refresh_list();              // the stale elements' pairs searched again
   void update_list(double horizon);  // extend, refresh or rebuild, valid for the coming `horizon`
-  void consider_pair(int a, int b, const Vec3& pa, const Vec3& pb, double margin = 0);
+  // Lists the pair if within reach + margin; `born`: listed because a face was released (B7b).
+  void consider_pair(int a, int b, const Vec3& pa, const Vec3& pb, double margin = 0, bool born = false);
+  // B7b: the pairs of two elements whose bond is in unlisted_bonds_ or with a sphere not yet listed.
+  bool born_at_release(int a, int b) const;
+  std::vector<std::pair<std::pair<long, long>, double>> all_sunk() const;  // collective, by key
   void sort_pairs();
   void count_pairs();  // collective: listed_pairs_ of every element
   // The list's linked cells over the block's box at rest (a sphere outside it is kept in the nearest
@@ -275,11 +287,16 @@ class FractureSolver {
   std::vector<Sphere> spheres_;
   // A listed pair of spheres (first's key < second's) and, for B7a, the travel sum of its two
   // elements below which it cannot touch (-inf: evaluate it); kept with the pair as the list changes.
+  // B7b: `sunk`, the overlap the pair may have without force (the depth it was born with at a
+  // release, shrinking as it opens; 0 for almost every pair).
   struct ListedPair {
     int first = 0, second = 0;
     double budget = -1e300;
+    double sunk = 0;
   };
   std::vector<ListedPair> pairs_;
+  // B7b: a pair's sunk depth went to `depth` (0: an ordinary pair again), on every rank that holds it.
+  void set_sunk(ListedPair& p, double depth);
   // B7a: a pair whose elements have not together travelled the gap it had when last evaluated
   // cannot touch (its force is zero: skipping it gives the same bits); note_gap records that gap.
   bool may_touch(const ListedPair& p, std::size_t a, std::size_t b) const { return travel_[a] + travel_[b] >= p.budget; }
@@ -287,6 +304,10 @@ class FractureSolver {
     p.budget = gap > kGapMargin ? travel_[a] + travel_[b] + gap - kGapMargin : -1e300;
   }
   std::vector<int> listed_pairs_;  // per element: its listed pairs (every rank alike; B7's split)
+  // B7b: the pairs with a sunk depth, by sphere keys (the list's pairs come and go; this stays).
+  std::map<std::pair<long, long>, double> sunk_;
+  long born_overlaps_ = 0;       // pairs born overlapping so far (this rank)
+  double deepest_born_ = 0;      // the deepest of them, m
   std::vector<Vec3> build_x_;
   std::vector<Quaternion> build_q_;
   double max_radius_ = 0, skin_ = 0;

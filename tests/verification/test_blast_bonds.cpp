@@ -477,6 +477,78 @@ TEST(Contacts, SkippingPairsThatCannotTouchGivesTheSameBits) {
   }
 }
 
+TEST(Contacts, AFaceReleasedInCompressionThrowsNothingAndStillResists) {
+  // B7b. Two mirror-image tetrahedra whose face has just been released (the bond broke at the
+  // last step, its spheres not yet listed), the lower one pressed 0.1 mm into the upper one, as a
+  // hinged face's compressed side is when its opened side fails. Its six sphere pairs are born
+  // overlapping by exactly that depth.
+  const double a = 0.05, h = 0.04, depth = 1e-4;
+  // Two elements: at most two ranks (one each on two; the pairs then live on both).
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm comm = MPI_COMM_NULL;
+  MPI_Comm_split(MPI_COMM_WORLD, rank < 2 ? 0 : MPI_UNDEFINED, rank, &comm);
+  if (comm == MPI_COMM_NULL) return;
+  for (const Stepping stepping : {Stepping::uniform, Stepping::stability}) {
+    const char* name = stepping == Stepping::uniform ? "uniform" : "stability";
+    auto run = [&](bool relax, double v_in) {
+      FractureSettings s;
+      s.stepping = stepping;
+      s.damping = false;  // elastic: what is thrown is what the springs were given
+      s.relax_born_overlaps = relax;
+      auto w = std::make_unique<World>(comm, mirrored_pair(a, h), s, Vec3{-0.1, -0.1, -0.1}, Vec3{0.1, 0.1, 0.1});
+      FractureSolver& f = w->solver;
+      const BondedBlock& b = f.block();
+      const std::size_t low = b.x0[0].z < 0 ? 0 : 1;
+      std::vector<Vec3> x = b.x0;
+      x[low].z += depth;
+      const std::vector<Vec3> zero(2);
+      ContactListState list;
+      list.unlisted = {0};  // released since the list was made
+      f.restore(x, b.q0, zero, zero, std::vector<std::array<BondVertex, 3>>(1), {1}, list, zero, zero);
+      f.set_velocity(low, {0, 0, v_in}, {});  // towards the upper one
+      f.setup();
+      while (f.time() < 3e-4) f.step();
+      f.sync_state();
+      return w;
+    };
+    // At rest: no force, nothing moves.
+    {
+      auto w = run(true, 0);
+      const FractureSolver& f = w->solver;
+      std::printf("%s: %ld pairs born overlapping, the deepest %.6g m\n", name, f.born_overlaps(), f.deepest_born_overlap());
+      EXPECT_GE(f.born_overlaps(), 6) << name;
+      EXPECT_NEAR(f.deepest_born_overlap(), depth, 1e-12) << name;
+      EXPECT_LT(f.energies().kinetic, 1e-18) << name << ": at most round-off (45 J without B7b)";
+      EXPECT_EQ(f.sunk_pairs(), static_cast<std::size_t>(f.born_overlaps())) << name << ": still sunk, at rest";
+    }
+    // The same without B7b: the springs throw the two apart with at least the energy the face's
+    // six, each 0.1 mm deep, were given, 6 k depth^2 / 2 = 45 J (the other pairs born overlapping,
+    // spheres of the side faces, add to it).
+    {
+      auto w = run(false, 0);
+      const double thrown = w->solver.energies().kinetic, given = 6 * 0.5 * 1.5e9 * depth * depth;
+      std::printf("%s without B7b: %.4g J thrown\n", name, thrown);
+      EXPECT_GT(thrown, 0.9 * given) << name;
+    }
+    // Pushed further in at 1 m/s: the contact resists from where it was born, and the elastic
+    // bounce sends the lower one back at 1 m/s relative; opened past zero overlap, the pairs are
+    // ordinary again.
+    {
+      auto w = run(true, 1.0);
+      const FractureSolver& f = w->solver;
+      const std::size_t low = f.block().x0[0].z < 0 ? 0 : 1, up = 1 - low;
+      const double closing = f.v()[low].z - f.v()[up].z;
+      EXPECT_NEAR(closing, -1.0, 1e-2) << name << ": bounced";
+      const double m = f.block().mass[0];
+      EXPECT_NEAR(f.energies().kinetic, 0.5 * m * 1.0, 1e-2 * 0.5 * m) << name << ": elastic";
+      EXPECT_EQ(f.sunk_pairs(), 0u) << name;
+      EXPECT_LT(f.x()[low].z - f.x()[up].z, f.block().x0[low].z - f.block().x0[up].z) << name << ": apart";
+    }
+  }
+  MPI_Comm_free(&comm);
+}
+
 TEST(Borehole, TheGasPushesTheWallAndNotAFragmentFreeInIt) {
   const TetMesh mesh = read_gmsh(std::string(TESSERA_SOURCE_DIR) + "/cases/blast/block.msh");
   Borehole hole;
