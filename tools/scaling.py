@@ -16,13 +16,17 @@ each run's summary.json into speed-up, parallel efficiency and the time per phas
         prints the model's error. The blast (its levelled step), or a DEM scene of spheres or discs
         whose bodies --bodies gives (the run's starting checkpoint).
 
-The blast's model (stability levels): every sub-step takes its busiest rank's work and ends in an
-all-gather of the elements due. A macro step's compute time is proportional to substep_time (the
-sum over sub-step kinds f, c_f of them per macro step, of the busiest rank's work; element_partition.hpp,
-written by `tessera balance` per partition), so T(P) = T(1) substep_time(P) / substep_time(1) + steps
-sum_f c_f (latency ceil(log2 P) + 112 N_f (P - 1) / P / bandwidth), N_f the elements due at kind f
-(14 doubles each). T(1) is the measured 1-rank loop time: its contact work, which the partition
-cannot plan, is assumed to split as the rest.
+The blast's model (stability levels): every sub-step takes its busiest rank's work and ends in the
+halo's exchange: each rank sends each neighbour the states of its due elements that the neighbour's
+bonds read (14 doubles each); the macro step ends in one all-gather of every element. A macro step's
+compute time is proportional to substep_time (the sum over sub-step kinds f, c_f of them per macro
+step, of the busiest rank's work; element_partition.hpp, written by `tessera balance` per partition),
+so T(P) = T(1) substep_time(P) / substep_time(1) + steps [latency_ag ceil(log2 P) + 112 N (P - 1) / P
+/ bandwidth_ag + sum_f c_f max_r (neighbours_r latency_sr + 112 H_f,r / bandwidth_sr)], H_f,r the
+elements rank r sends after a sub-step of kind f (`level_halo_sent`, at the initial levels; the
+contacts' pairs across ranks come later and are not counted), with the sendrecv's latency and
+bandwidth. T(1) is the measured 1-rank loop time: its contact work, which the partition cannot
+plan, is assumed to split as the rest.
 
 The DEM model: every step ends in an all-reduce (the list check), so the busiest rank sets the
 pace. Rank r's step costs the 1-rank run's contact time times its share of the listed pairs (a pair
@@ -310,10 +314,13 @@ def median_loop(runs, p):
 
 
 def blast_model(a, b, runs, net):
-    """The blast's levelled step: every sub-step waits for its busiest rank, then all-gathers."""
+    """The blast's levelled step: every sub-step waits for its busiest rank, then sends each neighbour
+    the due elements its bonds read (the halo); the macro step ends in one all-gather of every element."""
     t1 = median_loop(runs, 1)
     steps = runs[1][0]["steps"]
     how, n_f = b["partition"], b["level_elements"]
+    sr_lat = net.get("sendrecv_latency_s", net["latency_s"])
+    sr_bw = net.get("sendrecv_bandwidth_bytes_per_s", net["bandwidth_bytes_per_s"])
 
     def c(f):
         return 1.0 if f == 0 else 2.0 ** (f - 1)
@@ -321,16 +328,25 @@ def blast_model(a, b, runs, net):
     base = b["table"][0][how]["substep_time"]
     print(f"model: {b['case']}, partition {how}, {b['elements']} elements, {len(n_f)} levels, {steps} macro steps; "
           f"1 rank {t1:.2f} s; all-gather latency {1e6 * net['latency_s']:.1f} us, "
-          f"{net['bandwidth_bytes_per_s'] / 1e9:.2f} GB/s")
+          f"{net['bandwidth_bytes_per_s'] / 1e9:.2f} GB/s; halo {1e6 * sr_lat:.1f} us, {sr_bw / 1e9:.2f} GB/s")
     rows = []
     for row in b["table"]:
         p = row["ranks"]
-        compute = t1 * row[how]["substep_time"] / base
+        part = row[how]
+        compute = t1 * part["substep_time"] / base
         exchange = 0.0
         if p > 1:
             hops = math.ceil(math.log2(p))
-            exchange = steps * sum(c(f) * (hops * net["latency_s"] + 112.0 * n * (p - 1) / p / net["bandwidth_bytes_per_s"])
-                                   for f, n in enumerate(n_f))
+            gather = hops * net["latency_s"] + 112.0 * n_f[0] * (p - 1) / p / net["bandwidth_bytes_per_s"]
+            if "level_halo_sent" in part:  # 14 doubles an element; every rank waits for the slowest
+                nbrs = part["halo_neighbours"]
+                halo = sum(c(f) * max(nbrs[r] * sr_lat + 112.0 * sent[r] / sr_bw for r in range(p))
+                           for f, sent in enumerate(part["level_halo_sent"]))
+            else:  # an older `tessera balance`: the all-gather after every sub-step
+                halo = sum(c(f) * (hops * net["latency_s"] + 112.0 * n * (p - 1) / p / net["bandwidth_bytes_per_s"])
+                           for f, n in enumerate(n_f))
+                gather = 0.0
+            exchange = steps * (gather + halo)
         rows.append({"ranks": p, "compute": compute, "exchange": exchange, "predicted": compute + exchange,
                      "measured": median_loop(runs, p)})
     return rows

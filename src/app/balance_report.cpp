@@ -50,6 +50,7 @@ int blast_balance_report(const BalanceRequest& rq, const ConfigNode& root) {
       const auto level_work = part_level_work(block, solver.work(), part, p);
       const double substeps = substep_imbalance(level_work);
       const long cut = cut_bonds(block, part);
+      const LevelHalo halo = part_level_halo(block, solver.work(), part, p);
       std::printf(" %7.3f %7.3f %8ld", imbalance(work), substeps, cut);
       row[partition_name(how)] = {{"imbalance", imbalance(work)},
                                   {"substep_imbalance", substeps},
@@ -57,6 +58,8 @@ int blast_balance_report(const BalanceRequest& rq, const ConfigNode& root) {
                                   {"level_imbalance", level_imbalance(level_work)},
                                   {"level_work", level_work},
                                   {"cut_bonds", cut},
+                                  {"level_halo_sent", halo.sent},
+                                  {"halo_neighbours", halo.neighbours},
                                   {"work_per_rank", work}};
     }
     std::printf("\n");

@@ -180,6 +180,30 @@ std::vector<std::vector<double>> part_level_work(const BondedBlock& block, const
   return w;
 }
 
+LevelHalo part_level_halo(const BondedBlock& block, const ElementWork& work, const std::vector<int>& part, int parts) {
+  // (part sent to, element) once each, as build_halo lists them.
+  std::vector<std::pair<int, int>> sent;
+  for (const BondGeometry& g : block.bonds) {
+    const int pi = part[static_cast<std::size_t>(g.master)], pj = part[static_cast<std::size_t>(g.slave)];
+    if (pi == pj) continue;
+    sent.push_back({pj, g.master}), sent.push_back({pi, g.slave});
+  }
+  std::sort(sent.begin(), sent.end());
+  sent.erase(std::unique(sent.begin(), sent.end()), sent.end());
+  LevelHalo h;
+  const auto nl = static_cast<std::size_t>(work_levels(work));
+  h.sent.assign(nl, std::vector<double>(static_cast<std::size_t>(parts), 0.0));
+  std::vector<std::vector<char>> linked(static_cast<std::size_t>(parts), std::vector<char>(static_cast<std::size_t>(parts), 0));
+  for (const auto& [to, e] : sent) {
+    const int from = part[static_cast<std::size_t>(e)];
+    linked[static_cast<std::size_t>(from)][static_cast<std::size_t>(to)] = 1;
+    for (std::size_t f = 0; f <= static_cast<std::size_t>(work.level[static_cast<std::size_t>(e)]); ++f)
+      h.sent[f][static_cast<std::size_t>(from)] += 1.0;
+  }
+  for (const auto& row : linked) h.neighbours.push_back(static_cast<int>(std::count(row.begin(), row.end(), 1)));
+  return h;
+}
+
 std::vector<double> level_imbalance(const std::vector<std::vector<double>>& level_work) {
   std::vector<double> r;
   for (const auto& row : level_work) r.push_back(imbalance(row));

@@ -58,6 +58,15 @@ int work_levels(const ElementWork& work);
 // a wait; row 0 (every element due) is the coarsest sub-step.
 std::vector<std::vector<double>> part_level_work(const BondedBlock& block, const ElementWork& work,
                                                  const std::vector<int>& part, int parts);
+// The stability levels' halo (build_halo) at the initial levels: per sub-step kind f and part, the
+// element states it sends after that sub-step ([f][part]: its elements of level >= f bonded to
+// another part's, once per such part), and per part the parts it exchanges with. The contacts' pairs
+// across parts come later and are not counted.
+struct LevelHalo {
+  std::vector<std::vector<double>> sent;
+  std::vector<int> neighbours;
+};
+LevelHalo part_level_halo(const BondedBlock& block, const ElementWork& work, const std::vector<int>& part, int parts);
 // Each row's imbalance (max over mean).
 std::vector<double> level_imbalance(const std::vector<std::vector<double>>& level_work);
 // A macro step's time in units of work if each sub-step takes its busiest rank's work and ends in

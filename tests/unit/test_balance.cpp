@@ -109,3 +109,30 @@ TEST(Balance, SubStepsWaitForTheirBusiestRank) {
   // One level: the macro step's own imbalance.
   EXPECT_DOUBLE_EQ(substep_imbalance({{3, 1}}), 1.5);
 }
+
+namespace tessera {
+namespace {
+
+// The blast's halo per sub-step kind: four elements on two parts {0, 0, 1, 1} at levels {0, 2, 1, 0},
+// bonds 0-1 (inside part 0), 1-2, 1-3 and 0-2 (across). Part 0 sends element 1 (level 2: after
+// kinds 0, 1, 2) and element 0 (kind 0); part 1 sends element 2 (kinds 0, 1) and element 3 (kind 0),
+// each once however many of its bonds cross.
+TEST(Balance, TheHaloSendsEachCrossingElementOncePerKindItIsDue) {
+  BondedBlock block;
+  for (const auto& [m, s] : {std::pair{0, 1}, std::pair{1, 2}, std::pair{1, 3}, std::pair{0, 2}}) {
+    BondGeometry g;
+    g.master = m, g.slave = s;
+    block.bonds.push_back(g);
+  }
+  ElementWork work;
+  work.level = {0, 2, 1, 0};
+  const LevelHalo h = part_level_halo(block, work, {0, 0, 1, 1}, 2);
+  ASSERT_EQ(h.sent.size(), 3u);
+  EXPECT_EQ(h.sent[0], (std::vector<double>{2, 2}));
+  EXPECT_EQ(h.sent[1], (std::vector<double>{1, 1}));
+  EXPECT_EQ(h.sent[2], (std::vector<double>{1, 0}));
+  EXPECT_EQ(h.neighbours, (std::vector<int>{1, 1}));
+}
+
+}  // namespace
+}  // namespace tessera

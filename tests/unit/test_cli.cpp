@@ -106,6 +106,8 @@ TEST(Cli, BalanceReportsABlastCasesPartitions) {
     EXPECT_EQ(table[0][how]["cut_bonds"].get<long>(), 0) << how;
     EXPECT_EQ(table[2][how]["work_per_rank"].size(), 16u) << how;
     EXPECT_GE(table[1][how]["level_imbalance"].size(), 2u) << how;
+    EXPECT_EQ(table[1][how]["level_halo_sent"].size(), table[1][how]["level_imbalance"].size()) << how;  // scaling.py
+    EXPECT_EQ(table[1][how]["halo_neighbours"].size(), 4u) << how;
   }
   EXPECT_GT(table[1]["slabs"]["imbalance"].get<double>(), 1.5) << r.output;
   EXPECT_LE(table[1]["metis"]["imbalance"].get<double>(), 1.05) << r.output;
