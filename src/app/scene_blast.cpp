@@ -368,6 +368,8 @@ void BlastScene::write_checkpoint(const std::string& path) {
     for (const auto& [k, d] : list.sunk) sunk_keys.insert(sunk_keys.end(), {k.first, k.second}), sunk_depths.push_back(d);
     f.write_rows("contact_sunk_keys", sunk_keys.data(), root ? sunk_depths.size() : 0, 2);
     f.write_rows("contact_sunk_depths", sunk_depths.data(), root ? sunk_depths.size() : 0, 1);
+    f.set_attribute("born_overlaps", static_cast<long>(list.born_overlaps));
+    f.set_attribute("deepest_born_overlap", list.deepest_born_overlap);
     f.write_rows("bonds", bonds.data(), nb, 10);
     std::vector<std::int64_t> order(b.mesh_index.begin(), b.mesh_index.begin() + static_cast<std::ptrdiff_t>(n));
     f.write_rows("mesh_index", order.data(), n, 1);  // the element order the rows follow
@@ -434,6 +436,8 @@ void BlastScene::read_checkpoint(const std::string& path) {
     const std::vector<std::int64_t> keys = f.read_all<std::int64_t>("contact_sunk_keys", cols);
     const std::vector<double> depths = f.read_all<double>("contact_sunk_depths", cols);
     for (std::size_t k = 0; k < depths.size(); ++k) list.sunk.push_back({{keys[2 * k], keys[2 * k + 1]}, depths[k]});
+    list.born_overlaps = f.attribute_long("born_overlaps");
+    list.deepest_born_overlap = f.attribute_double("deepest_born_overlap");
   }
   solver_->restore(x, q, v, L, bs, broken, list, F, T);
   solver_->set_clock(f.attribute_double("time"), f.attribute_long("steps"));
@@ -481,6 +485,7 @@ void BlastScene::summarise(nlohmann::json& s) {
   q["max_speed"] = fastest;
   q["born_overlaps"] = solver_->born_overlaps();  // B7b
   q["deepest_born_overlap"] = solver_->deepest_born_overlap();
+  q["sunk_pairs"] = solver_->sunk_pairs();
   q["kinetic_energy"] = en.kinetic;
   q["bond_elastic_energy"] = en.bond_elastic;
   q["contact_elastic_energy"] = en.contact_elastic;

@@ -146,9 +146,10 @@ void FractureSolver::consider_pair(int a, int b, const Vec3& pa, const Vec3& pb,
   if (bonded(sa.element, sb.element)) return;
   ListedPair p = sa.key < sb.key ? ListedPair{a, b} : ListedPair{b, a};
   const double overlap = sa.radius + sb.radius - std::sqrt(d2);
-  if (overlap > 0 && !sunk_.empty()) {
+  if (!sunk_.empty()) {
+    // Listed again: the depth it kept, at most its overlap now (none once open), as an evaluation would.
     const auto it = sunk_.find({std::min(sa.key, sb.key), std::max(sa.key, sb.key)});
-    if (it != sunk_.end()) p.sunk = it->second;
+    if (it != sunk_.end()) set_sunk(p, std::clamp(overlap, 0.0, it->second));
   }
   if (overlap > 0 && born && settings_.relax_born_overlaps && p.sunk == 0 && born_at_release(a, b)) {
     // B7b: born overlapping at a release; the pair's force starts from here.

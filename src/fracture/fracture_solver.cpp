@@ -354,7 +354,8 @@ void FractureSolver::restore(const std::vector<Vec3>& x, const std::vector<Quate
   F_ = F, T_ = T;
   spheres_.clear(), pairs_.clear(), unlisted_bonds_.clear();
   sunk_.clear();
-  for (const auto& [keys, depth] : list.sunk) sunk_[keys] = depth;  // B7b
+  born_overlaps_ = decomp_.rank() == 0 ? list.born_overlaps : 0;  // the sum over the ranks
+  deepest_born_ = list.deepest_born_overlap;
   element_spheres_.assign(block_.size(), {});
   max_radius_ = 0;
   add_surface_spheres();
@@ -369,6 +370,17 @@ void FractureSolver::restore(const std::vector<Vec3>& x, const std::vector<Quate
   listed_spheres_ = spheres_.size();
   for (int b : list.unlisted) broken_[static_cast<std::size_t>(b)] = 1, add_spheres(b);
   update_fragments();
+  {
+    // B7b: the depths of the pairs this rank lists (one of the two elements its own), so that every
+    // rank holding a pair holds it, and only those.
+    std::unordered_map<long, int> element_of;
+    for (const Sphere& sp : spheres_) element_of[sp.key] = sp.element;
+    const int rank = decomp_.rank();
+    for (const auto& [keys, depth] : list.sunk)
+      if (owner_[static_cast<std::size_t>(element_of.at(keys.first))] == rank ||
+          owner_[static_cast<std::size_t>(element_of.at(keys.second))] == rank)
+        sunk_[keys] = depth;
+  }
   build_x_.clear(), build_q_.clear();
   if (!list.stale && list.x.size() == block_.size()) {
     // The list as the interrupted run had it (the per-element levels depend on which pairs are
@@ -400,7 +412,8 @@ void FractureSolver::restore(const std::vector<Vec3>& x, const std::vector<Quate
 }
 
 ContactListState FractureSolver::contact_list_state() const {
-  ContactListState s{build_x_, build_q_, build_x_.empty(), {}, unlisted_bonds_, cell_radius_, {}};
+  ContactListState s{build_x_, build_q_, build_x_.empty(), {}, unlisted_bonds_, cell_radius_, {}, born_overlaps(),
+                     deepest_born_overlap()};
   // Every rank's pairs, each once (a pair across ranks is on both), by key.
   std::vector<long> mine;
   for (const ListedPair& lp : pairs_)

@@ -92,6 +92,8 @@ struct ContactListState {
   std::vector<int> unlisted;                 // faces released since the list was last made, in order
   double cell_radius = 0;                    // the largest sphere radius at the last build
   std::vector<std::pair<std::pair<long, long>, double>> sunk;  // B7b: pairs born overlapping, by key
+  long born_overlaps = 0;       // B7b's counts so far (summary.json)
+  double deepest_born_overlap = 0;
 };
 
 struct FractureEnergies {
