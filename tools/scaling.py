@@ -22,10 +22,11 @@ bonds read (14 doubles each); the macro step ends in one all-gather of every ele
 compute time is proportional to substep_time (the sum over sub-step kinds f, c_f of them per macro
 step, of the busiest rank's work; element_partition.hpp, written by `tessera balance` per partition),
 so T(P) = T(1) substep_time(P) / substep_time(1) + steps [latency_ag ceil(log2 P) + 112 N (P - 1) / P
-/ bandwidth_ag + sum_f c_f max_r (neighbours_r latency_sr + 112 H_f,r / bandwidth_sr)], H_f,r the
-elements rank r sends after a sub-step of kind f (`level_halo_sent`, at the initial levels; the
-contacts' pairs across ranks come later and are not counted), with the sendrecv's latency and
-bandwidth. T(1) is the measured 1-rank loop time: its contact work, which the partition cannot
+/ bandwidth_ag + sum_f c_f (latency_sr + 112 max_r H_f,r / bandwidth_sr)], H_f,r the elements rank
+r sends after a sub-step of kind f (`level_halo_sent`, at the initial levels; the contacts' pairs
+across ranks come later and are not counted), with the sendrecv's latency and bandwidth: the
+messages to every neighbour are in flight together, so one latency (a lower bound: the overhead of
+each message, up to `halo_neighbours` of them, is not counted). T(1) is the measured 1-rank loop time: its contact work, which the partition cannot
 plan, is assumed to split as the rest.
 
 The DEM model: every step ends in an all-reduce (the list check), so the busiest rank sets the
@@ -339,9 +340,9 @@ def blast_model(a, b, runs, net):
             hops = math.ceil(math.log2(p))
             gather = hops * net["latency_s"] + 112.0 * n_f[0] * (p - 1) / p / net["bandwidth_bytes_per_s"]
             if "level_halo_sent" in part:  # 14 doubles an element; every rank waits for the slowest
-                nbrs = part["halo_neighbours"]
-                halo = sum(c(f) * max(nbrs[r] * sr_lat + 112.0 * sent[r] / sr_bw for r in range(p))
-                           for f, sent in enumerate(part["level_halo_sent"]))
+                # The messages to all neighbours are in flight together (MPI_Isend/Irecv): one
+                # latency, then the busiest rank's bytes (a lower bound: per-message overheads not counted).
+                halo = sum(c(f) * (sr_lat + 112.0 * max(sent) / sr_bw) for f, sent in enumerate(part["level_halo_sent"]))
             else:  # an older `tessera balance`: the all-gather after every sub-step
                 halo = sum(c(f) * (hops * net["latency_s"] + 112.0 * n * (p - 1) / p / net["bandwidth_bytes_per_s"])
                            for f, n in enumerate(n_f))
