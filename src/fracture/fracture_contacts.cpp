@@ -145,6 +145,7 @@ void FractureSolver::consider_pair(int a, int b, const Vec3& pa, const Vec3& pb,
   if (!own_a && owner_[static_cast<std::size_t>(sb.element)] != rank) return;
   if (bonded(sa.element, sb.element)) return;
   ListedPair p = sa.key < sb.key ? ListedPair{a, b} : ListedPair{b, a};
+  if (sunk_.empty() && !born) return pairs_.push_back(p);  // most listings: no depth to find
   const double overlap = sa.radius + sb.radius - std::sqrt(d2);
   if (!sunk_.empty()) {
     // Listed again: the depth it kept, at most its overlap now (none once open), as an evaluation would.
