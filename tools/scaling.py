@@ -339,14 +339,10 @@ def blast_model(a, b, runs, net):
         if p > 1:
             hops = math.ceil(math.log2(p))
             gather = hops * net["latency_s"] + 112.0 * n_f[0] * (p - 1) / p / net["bandwidth_bytes_per_s"]
-            if "level_halo_sent" in part:  # 14 doubles an element; every rank waits for the slowest
-                # The messages to all neighbours are in flight together (MPI_Isend/Irecv): one
-                # latency, then the busiest rank's bytes (a lower bound: per-message overheads not counted).
-                halo = sum(c(f) * (sr_lat + 112.0 * max(sent) / sr_bw) for f, sent in enumerate(part["level_halo_sent"]))
-            else:  # an older `tessera balance`: the all-gather after every sub-step
-                halo = sum(c(f) * (hops * net["latency_s"] + 112.0 * n * (p - 1) / p / net["bandwidth_bytes_per_s"])
-                           for f, n in enumerate(n_f))
-                gather = 0.0
+            # 14 doubles an element; every rank waits for the slowest. The messages to all neighbours
+            # are in flight together (MPI_Isend/Irecv): one latency, then the busiest rank's bytes (a
+            # lower bound: per-message overheads not counted).
+            halo = sum(c(f) * (sr_lat + 112.0 * max(sent) / sr_bw) for f, sent in enumerate(part["level_halo_sent"]))
             exchange = steps * (gather + halo)
         rows.append({"ranks": p, "compute": compute, "exchange": exchange, "predicted": compute + exchange,
                      "measured": median_loop(runs, p)})

@@ -370,17 +370,17 @@ void FractureSolver::restore(const std::vector<Vec3>& x, const std::vector<Quate
   listed_spheres_ = spheres_.size();
   for (int b : list.unlisted) broken_[static_cast<std::size_t>(b)] = 1, add_spheres(b);
   update_fragments();
-  {
-    // B7b: the depths of the pairs this rank lists (one of the two elements its own), so that every
-    // rank holding a pair holds it, and only those.
-    std::unordered_map<long, int> element_of;
-    for (const Sphere& sp : spheres_) element_of[sp.key] = sp.element;
-    const int rank = decomp_.rank();
-    for (const auto& [keys, depth] : list.sunk)
-      if (owner_[static_cast<std::size_t>(element_of.at(keys.first))] == rank ||
-          owner_[static_cast<std::size_t>(element_of.at(keys.second))] == rank)
-        sunk_[keys] = depth;
-  }
+  // The checkpoint names spheres by key; a pair is this rank's if one of its elements is.
+  std::unordered_map<long, int> by_key;
+  for (std::size_t k = 0; k < spheres_.size(); ++k) by_key[spheres_[k].key] = static_cast<int>(k);
+  const int rank = decomp_.rank();
+  const auto mine = [&](long ka, long kb) {
+    return owner_[static_cast<std::size_t>(spheres_[static_cast<std::size_t>(by_key.at(ka))].element)] == rank ||
+           owner_[static_cast<std::size_t>(spheres_[static_cast<std::size_t>(by_key.at(kb))].element)] == rank;
+  };
+  // B7b: the depths of the pairs this rank lists, so that every rank holding a pair holds it.
+  for (const auto& [keys, depth] : list.sunk)
+    if (mine(keys.first, keys.second)) sunk_[keys] = depth;
   build_x_.clear(), build_q_.clear();
   if (!list.stale && list.x.size() == block_.size()) {
     // The list as the interrupted run had it (the per-element levels depend on which pairs are
@@ -391,19 +391,11 @@ void FractureSolver::restore(const std::vector<Vec3>& x, const std::vector<Quate
     cell_radius_ = list.cell_radius;
     cell_size_ = 2 * cell_radius_ + skin_;
     reset_cells();
-    std::unordered_map<long, int> by_key;
-    for (std::size_t k = 0; k < spheres_.size(); ++k) {
-      by_key[spheres_[k].key] = static_cast<int>(k);
-      if (k < listed_spheres_) insert_cell(static_cast<int>(k), sphere_position(k));
-    }
-    const int rank = decomp_.rank();
+    for (std::size_t k = 0; k < listed_spheres_; ++k) insert_cell(static_cast<int>(k), sphere_position(k));
     for (const auto& [ka, kb] : list.pairs) {
-      const int a = by_key.at(ka), b = by_key.at(kb);
-      if (owner_[static_cast<std::size_t>(spheres_[static_cast<std::size_t>(a)].element)] == rank ||
-          owner_[static_cast<std::size_t>(spheres_[static_cast<std::size_t>(b)].element)] == rank) {
-        const auto it = sunk_.find({ka, kb});
-        pairs_.push_back({a, b, -1e300, it == sunk_.end() ? 0.0 : it->second});
-      }
+      if (!mine(ka, kb)) continue;
+      const auto it = sunk_.find({ka, kb});
+      pairs_.push_back({by_key.at(ka), by_key.at(kb), -1e300, it == sunk_.end() ? 0.0 : it->second});
     }
     sort_pairs();
   }
