@@ -70,8 +70,7 @@ int FractureSolver::mark_stale(double horizon) {
     std::vector<double>& fastest = scratch_fastest_;
     fastest.assign(speed.begin(), speed.end());
     for (const ListedPair& lp : pairs_) {
-      const std::size_t a = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(lp.first)].element);
-      const std::size_t b = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(lp.second)].element);
+      const std::size_t a = static_cast<std::size_t>(lp.ea), b = static_cast<std::size_t>(lp.eb);
       fastest[a] = std::max(fastest[a], speed[b]), fastest[b] = std::max(fastest[b], speed[a]);
     }
     const int rank = decomp_.rank();
@@ -85,48 +84,10 @@ int FractureSolver::mark_stale(double horizon) {
   return static_cast<int>(std::count(stale_.begin(), stale_.end(), 1));
 }
 
-void FractureSolver::reset_cells() {
-  // At most ~8 cells per sphere (+ a floor): a coarse mesh's large spheres must not make a fine grid.
-  const double spheres = static_cast<double>(spheres_.size());
-  for (;;) {
-    double total = 1;
-    for (int d = 0; d < 3; ++d) {
-      cell_count_[static_cast<std::size_t>(d)] = std::max(1, static_cast<int>((box_hi_[d] - box_lo_[d]) / cell_size_) + 1);
-      total *= cell_count_[static_cast<std::size_t>(d)];
-    }
-    if (total <= 8 * spheres + 4096) break;
-    cell_size_ *= 1.25;  // larger cells stay correct (more candidates)
-  }
-  cell_head_.assign(static_cast<std::size_t>(cell_count_[0]) * cell_count_[1] * cell_count_[2], -1);
-  cell_next_.assign(spheres_.size(), -1);
-}
-
-int FractureSolver::cell_coord(double v, int d) const {
-  const double c = std::floor((v - box_lo_[d]) / cell_size_);
-  return static_cast<int>(std::clamp(c, 0.0, static_cast<double>(cell_count_[static_cast<std::size_t>(d)] - 1)));
-}
-
-void FractureSolver::insert_cell(int s, const Vec3& p) {
-  if (cell_next_.size() <= static_cast<std::size_t>(s)) cell_next_.resize(spheres_.size(), -1);
-  const std::size_t c = (static_cast<std::size_t>(cell_coord(p.z, 2)) * cell_count_[1] + cell_coord(p.y, 1)) * cell_count_[0] +
-                        cell_coord(p.x, 0);
-  cell_next_[static_cast<std::size_t>(s)] = cell_head_[c];
-  cell_head_[c] = s;
-}
-
-template <class F>
-void FractureSolver::for_near(const Vec3& p, int ring, F&& f) const {
-  int lo[3], hi[3];
-  for (int d = 0; d < 3; ++d) {
-    const int c = cell_coord(p[d], d);
-    lo[d] = std::max(0, c - ring), hi[d] = std::min(cell_count_[static_cast<std::size_t>(d)] - 1, c + ring);
-  }
-  for (int z = lo[2]; z <= hi[2]; ++z)
-    for (int y = lo[1]; y <= hi[1]; ++y)
-      for (int x = lo[0]; x <= hi[0]; ++x)
-        for (int s = cell_head_[(static_cast<std::size_t>(z) * cell_count_[1] + y) * cell_count_[0] + x]; s >= 0;
-             s = cell_next_[static_cast<std::size_t>(s)])
-          f(s);
+void FractureSolver::reset_grid() {
+  double smallest = cell_radius_;
+  for (const Sphere& sp : spheres_) smallest = std::min(smallest, sp.radius);
+  grid_.reset(1.5 * cell_radius_, smallest, 2 * skin_);
 }
 
 Vec3 FractureSolver::sphere_position(std::size_t s) const {
@@ -144,7 +105,7 @@ void FractureSolver::consider_pair(int a, int b, const Vec3& pa, const Vec3& pb,
   const bool own_a = owner_[static_cast<std::size_t>(sa.element)] == rank;
   if (!own_a && owner_[static_cast<std::size_t>(sb.element)] != rank) return;
   if (bonded(sa.element, sb.element)) return;
-  ListedPair p = sa.key < sb.key ? ListedPair{a, b} : ListedPair{b, a};
+  ListedPair p = sa.key < sb.key ? listed_pair(a, b) : listed_pair(b, a);
   if (sunk_.empty() && !born) return pairs_.push_back(p);  // most listings: no depth to find
   const double overlap = sa.radius + sb.radius - std::sqrt(d2);
   if (!sunk_.empty()) {
@@ -198,14 +159,18 @@ void FractureSolver::build_list() {
   at.resize(n);
   for (std::size_t s = 0; s < n; ++s) at[s] = sphere_position(s);
   cell_radius_ = max_radius_;
-  cell_size_ = 2 * max_radius_ + skin_;
-  reset_cells();
-  for (std::size_t s = 0; s < n; ++s) insert_cell(static_cast<int>(s), at[s]);
+  reset_grid();
+  for (std::size_t s = 0; s < n; ++s) insert_sphere(s, at[s]);
   for (std::size_t a = 0; a < n; ++a) {
+    // Each pair once: from its smaller sphere, and within one size class from the lower index.
     const Vec3& p = at[a];
     const int ia = static_cast<int>(a);
-    for_near(p, 1, [&](int b) {
-      if (b > ia) consider_pair(ia, b, p, at[static_cast<std::size_t>(b)], 0, true);
+    const double r = spheres_[a].radius;
+    const int cls = grid_.size_class(r);
+    grid_.near(p, r, true, [&](int b) {
+      if (b == ia || (b < ia && grid_.size_class(spheres_[static_cast<std::size_t>(b)].radius) == cls)) return;
+      consider_pair(std::min(ia, b), std::max(ia, b), at[static_cast<std::size_t>(std::min(ia, b))],
+                    at[static_cast<std::size_t>(std::max(ia, b))], 0, true);
     });
   }
   unlisted_bonds_.clear();
@@ -216,14 +181,16 @@ void FractureSolver::build_list() {
 
 void FractureSolver::extend_list() {
   // Faces released since the list was made: their new spheres against every sphere within reach
-  // now (the cells hold each sphere within skin/2 of where it is, so two cells around cover
-  // reach + skin/2), and the two elements' older spheres against each other (no longer bonded).
+  // now (the grid holds each sphere where its element was last searched, within skin/2 of where it
+  // is: the grid's pad covers it), and the two elements' older spheres against each other.
   // Safe until the next rebuild: from now on each element moves at most skin/2 - what it has moved.
   const std::size_t n = spheres_.size();
   for (std::size_t a = listed_spheres_; a < n; ++a) {
     const Vec3 p = sphere_position(a);
-    for_near(p, 2, [&](int b) { consider_pair(static_cast<int>(a), b, p, sphere_position(static_cast<std::size_t>(b)), 0, true); });
-    insert_cell(static_cast<int>(a), p);
+    grid_.near(p, spheres_[a].radius, false,
+               [&](int b) { consider_pair(static_cast<int>(a), b, p, sphere_position(static_cast<std::size_t>(b)), 0, true); });
+    const std::size_t e = static_cast<std::size_t>(spheres_[a].element);
+    insert_sphere(a, build_x_[e] + build_q_[e].rotate(spheres_[a].centre));  // where its element was searched
   }
   for (int bond : unlisted_bonds_) {
     const BondGeometry& g = block_.bonds[static_cast<std::size_t>(bond)];
@@ -262,26 +229,24 @@ void FractureSolver::refresh_list() {
   // since its own search is listed within reach + m_X: from now on A moves at most skin/2 and X at
   // most skin/2 + m_X from here, so a pair not listed stays apart until one of them is stale.
   ++list_refreshes_;
-  const std::size_t n = spheres_.size();
   std::erase_if(pairs_, [&](const ListedPair& p) {
-    return stale_[static_cast<std::size_t>(spheres_[static_cast<std::size_t>(p.first)].element)] ||
-           stale_[static_cast<std::size_t>(spheres_[static_cast<std::size_t>(p.second)].element)];
+    return stale_[static_cast<std::size_t>(p.ea)] || stale_[static_cast<std::size_t>(p.eb)];
   });
-  std::vector<Vec3>& at = scratch_at_;
-  at.resize(n);
-  for (std::size_t s = 0; s < n; ++s) at[s] = sphere_position(s);
-  reset_cells();  // where every sphere is now (a searched element's spheres may be far from the last build)
-  for (std::size_t s = 0; s < n; ++s) insert_cell(static_cast<int>(s), at[s]);
+  // The grid holds every sphere where its element was last searched (within skin/2 of where it is
+  // now, 2 skins of pad with the margin below): the searched elements' spheres move to where they are.
   for (std::size_t e = 0; e < block_.size(); ++e) {
     if (!stale_[e]) continue;
     build_x_[e] = x_[e], build_q_[e] = q_[e];
+    for (const int a : element_spheres_[e]) grid_.move(a, sphere_position(static_cast<std::size_t>(a)), spheres_[static_cast<std::size_t>(a)].radius);
+  }
+  for (std::size_t e = 0; e < block_.size(); ++e) {
+    if (!stale_[e]) continue;
     for (const int a : element_spheres_[e]) {
-      const Vec3& p = at[static_cast<std::size_t>(a)];
-      // Ring 2: reach + m_X <= 2 r_max + 1.5 skin, within two cells of 2 r_max + skin.
-      for_near(p, 2, [&](int b) {
+      const Vec3 p = sphere_position(static_cast<std::size_t>(a));
+      grid_.near(p, spheres_[static_cast<std::size_t>(a)].radius, false, [&](int b) {
         const std::size_t eb = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(b)].element);
         if (stale_[eb] && (eb < e || (eb == e && b <= a))) return;  // two searched elements: once
-        consider_pair(a, b, p, at[static_cast<std::size_t>(b)], stale_[eb] ? 0.0 : moved_[eb]);
+        consider_pair(a, b, p, sphere_position(static_cast<std::size_t>(b)), stale_[eb] ? 0.0 : moved_[eb]);
       });
     }
   }
@@ -291,7 +256,7 @@ void FractureSolver::refresh_list() {
 
 void FractureSolver::update_list(double horizon) {
   // Never built, spheres larger than the cells allow, or most elements stale: a full build.
-  if (build_x_.empty() || max_radius_ > 1.5 * cell_radius_) return build_list();
+  if (build_x_.empty() || max_radius_ > 1.5 * cell_radius_) return build_list();  // the grid's r_top
   if (listed_spheres_ < spheres_.size()) extend_list();
   const int stale = mark_stale(horizon);
   if (stale == 0) return;
@@ -349,8 +314,7 @@ void FractureSolver::contact_forces() {
   update_list(0);
   const int rank = decomp_.rank();
   for (std::size_t p = 0; p < pairs_.size(); ++p) {
-    const std::size_t ea = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(pairs_[p].first)].element);
-    const std::size_t eb = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(pairs_[p].second)].element);
+    const std::size_t ea = static_cast<std::size_t>(pairs_[p].ea), eb = static_cast<std::size_t>(pairs_[p].eb);
     if (settings_.skip_apart && !may_touch(pairs_[p], ea, eb)) continue;  // B7a
     ++contact_evaluations_;
     const PairForce f = contact_force(p, pose(ea), pose(eb), dt_);

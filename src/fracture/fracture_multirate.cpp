@@ -111,7 +111,7 @@ void FractureSolver::build_halo(int K) {
       if (owner_[static_cast<std::size_t>(g.master)] != owner_[static_cast<std::size_t>(g.slave)]) cross(g.master, g.slave);
     }
   for (const ListedPair& lp : pairs_) {
-    const int a = spheres_[static_cast<std::size_t>(lp.first)].element, b = spheres_[static_cast<std::size_t>(lp.second)].element;
+    const int a = lp.ea, b = lp.eb;
     if (owner_[static_cast<std::size_t>(a)] != owner_[static_cast<std::size_t>(b)]) cross(a, b);
   }
   for (auto* v : {&h.sent, &h.read}) {
@@ -196,8 +196,7 @@ void FractureSolver::multirate_step() {
       bonds[static_cast<std::size_t>(std::max(level_[i], level_[j]))].push_back(static_cast<int>(b));
     }
     for (std::size_t p = 0; p < pairs_.size(); ++p) {
-      const std::size_t a = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(pairs_[p].first)].element);
-      const std::size_t b = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(pairs_[p].second)].element);
+      const std::size_t a = static_cast<std::size_t>(pairs_[p].ea), b = static_cast<std::size_t>(pairs_[p].eb);
       contacts[static_cast<std::size_t>(std::max(level_[a], level_[b]))].push_back(static_cast<int>(p));
     }
   }
@@ -216,8 +215,7 @@ void FractureSolver::multirate_step() {
       kick_level[i] = std::max(kick_level[i], k), kick_level[j] = std::max(kick_level[j], k);
     }
     for (const ListedPair& lp : pairs_) {
-      const std::size_t i = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(lp.first)].element);
-      const std::size_t j = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(lp.second)].element);
+      const std::size_t i = static_cast<std::size_t>(lp.ea), j = static_cast<std::size_t>(lp.eb);
       const int k = std::max(level_[i], level_[j]);
       kick_level[i] = std::max(kick_level[i], k), kick_level[j] = std::max(kick_level[j], k);
     }
@@ -280,9 +278,8 @@ void FractureSolver::multirate_step() {
       for (int k = first; k <= K; ++k) {
         const double h = std::ldexp(dt_, -k);
         for (int p : contacts[static_cast<std::size_t>(k)]) {
-          const std::size_t a = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(pairs_[static_cast<std::size_t>(p)].first)].element);
-          const std::size_t b = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(pairs_[static_cast<std::size_t>(p)].second)].element);
           ListedPair& pair = pairs_[static_cast<std::size_t>(p)];
+          const std::size_t a = static_cast<std::size_t>(pair.ea), b = static_cast<std::size_t>(pair.eb);
           if (skip && !may_touch(pair, a, b)) continue;  // B7a: its force is zero
           ++contact_evaluations_;
           const PairForce f = contact_force(static_cast<std::size_t>(p), pose_at(a, t), pose_at(b, t), h);

@@ -72,12 +72,6 @@ FractureSolver::FractureSolver(const Decomposition& decomp, BondedBlock block, F
   reach_.assign(n, 0.0), travel_.assign(n, 0.0);
   for (std::size_t e = 0; e < n; ++e)
     for (const Vec3& p : block_.vertices[e]) reach_[e] = std::max(reach_[e], norm(p));
-  box_lo_ = {1e300, 1e300, 1e300}, box_hi_ = {-1e300, -1e300, -1e300};
-  for (std::size_t e = 0; e < n; ++e)
-    for (int d = 0; d < 3; ++d) {
-      box_lo_[d] = std::min(box_lo_[d], x_[e][d] - reach_[e]);
-      box_hi_[d] = std::max(box_hi_[d], x_[e][d] + reach_[e]);
-    }
   element_bonds_.assign(n, {});
   for (std::size_t b = 0; b < block_.bonds.size(); ++b)
     for (int e : {block_.bonds[b].master, block_.bonds[b].slave})
@@ -389,13 +383,14 @@ void FractureSolver::restore(const std::vector<Vec3>& x, const std::vector<Quate
     build_x_ = list.x, build_q_ = list.q;
     x_ = list.x, q_ = list.q;
     cell_radius_ = list.cell_radius;
-    cell_size_ = 2 * cell_radius_ + skin_;
-    reset_cells();
-    for (std::size_t k = 0; k < listed_spheres_; ++k) insert_cell(static_cast<int>(k), sphere_position(k));
+    reset_grid();
+    for (std::size_t k = 0; k < listed_spheres_; ++k) insert_sphere(k, sphere_position(k));
     for (const auto& [ka, kb] : list.pairs) {
       if (!mine(ka, kb)) continue;
       const auto it = sunk_.find({ka, kb});
-      pairs_.push_back({by_key.at(ka), by_key.at(kb), -1e300, it == sunk_.end() ? 0.0 : it->second});
+      ListedPair lp = listed_pair(by_key.at(ka), by_key.at(kb));
+      lp.sunk = it == sunk_.end() ? 0.0 : it->second;
+      pairs_.push_back(lp);
     }
     sort_pairs();
   }

@@ -33,6 +33,7 @@
 #include "fracture/bonded_block.hpp"
 #include "fracture/element_partition.hpp"
 #include "fracture/face_spheres.hpp"
+#include "fracture/sphere_grid.hpp"
 #include "fracture/fragments.hpp"
 
 namespace tessera {
@@ -259,13 +260,12 @@ class FractureSolver {
   std::vector<std::pair<std::pair<long, long>, double>> all_sunk() const;  // collective, by key
   void sort_pairs();
   void count_pairs();  // collective: listed_pairs_ of every element
-  // The list's linked cells over the block's box at rest (a sphere outside it is kept in the nearest
-  // cell: two spheres within a cell of each other stay within a cell of each other).
-  void reset_cells();  // empty cells of size cell_size_
-  int cell_coord(double v, int d) const;
-  void insert_cell(int s, const Vec3& p);
-  template <class F>
-  void for_near(const Vec3& p, int ring, F&& f) const;  // f(s) for every sphere within `ring` cells
+  // The list's cells (sphere_grid.hpp): every sphere where its element was last searched (build_x_,
+  // build_q_); spheres up to 1.5 times the largest at the last build (the faces released until the
+  // next one); every search padded by 2 skins (a refresh's margin of skin/2 beyond the skin, and a
+  // sphere may be skin/2 from where the grid holds it).
+  void reset_grid();
+  void insert_sphere(std::size_t s, const Vec3& p) { grid_.insert(static_cast<int>(s), p, spheres_[s].radius); }
   Vec3 sphere_position(std::size_t s) const;
   double stable_dt() const;
 
@@ -293,9 +293,13 @@ class FractureSolver {
   // release, shrinking as it opens; 0 for almost every pair).
   struct ListedPair {
     int first = 0, second = 0;
+    int ea = 0, eb = 0;  // first's and second's elements (the sub-steps' loops read them per visit)
     double budget = -1e300;
     double sunk = 0;
   };
+  ListedPair listed_pair(int first, int second) const {
+    return {first, second, spheres_[static_cast<std::size_t>(first)].element, spheres_[static_cast<std::size_t>(second)].element};
+  }
   std::vector<ListedPair> pairs_;
   // B7b: a pair's sunk depth went to `depth` (0: an ordinary pair again), on every rank that holds it.
   void set_sunk(ListedPair& p, double depth);
@@ -328,10 +332,8 @@ class FractureSolver {
   std::vector<std::vector<int>> element_spheres_;
   std::vector<int> unlisted_bonds_;  // released since the list was last made
   std::size_t listed_spheres_ = 0;
-  Vec3 box_lo_{}, box_hi_{};  // the block at rest, with its elements' reach
-  std::array<int, 3> cell_count_{1, 1, 1};
-  std::vector<int> cell_head_, cell_next_;  // first sphere of each cell; the next one in its cell
-  double cell_size_ = 1, cell_radius_ = 0;
+  SphereGrid grid_;
+  double cell_radius_ = 0;  // the largest sphere at the last build
   double dt_ = 0, time_ = 0, min_dt_ = 1e300, min_dt_time_ = 0;
   std::vector<int> level_, stable_level_, kick_level_;
   // Per-level lists of the macro step (bonds, contact pairs; elements by owner), storage reused.
