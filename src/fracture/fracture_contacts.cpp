@@ -311,7 +311,6 @@ PairForce FractureSolver::contact_force(std::size_t pair, const Pose& pa, const 
 
 void FractureSolver::contact_forces() {
   if (spheres_.empty()) return;
-  update_list(0);
   const int rank = decomp_.rank();
   for (std::size_t p = 0; p < pairs_.size(); ++p) {
     const std::size_t ea = static_cast<std::size_t>(pairs_[p].ea), eb = static_cast<std::size_t>(pairs_[p].eb);

@@ -187,9 +187,12 @@ void FractureSolver::multirate_step() {
   auto& bonds = bond_buckets_;
   auto& contacts = contact_buckets_;
   clear_buckets(bonds, K + 1), clear_buckets(contacts, K + 1);
+  if (!spheres_.empty()) {
+    auto t = timers_.scope("contact_list");
+    update_list(dt_);
+  }
   {
     auto t = timers_.scope("contact_forces");
-    if (!spheres_.empty()) update_list(dt_);
     for (std::size_t b = 0; b < block_.bonds.size(); ++b) {
       const std::size_t i = static_cast<std::size_t>(block_.bonds[b].master), j = static_cast<std::size_t>(block_.bonds[b].slave);
       if (broken_[b] || (owner_[i] != rank && owner_[j] != rank)) continue;

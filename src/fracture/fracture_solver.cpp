@@ -463,6 +463,10 @@ void FractureSolver::compute_forces(double time) {
     auto t = timers_.scope("bond_forces");
     bond_forces();
   }
+  if (!spheres_.empty()) {
+    auto t = timers_.scope("contact_list");
+    update_list(0);  // the uniform step checks the list every step
+  }
   {
     auto t = timers_.scope("contact_forces");
     contact_forces();
@@ -478,7 +482,7 @@ PairForce FractureSolver::bond_force(std::size_t b, const Pose& pi, const Pose& 
   const double cn = settings_.damping ? law.cn : 0, cs = settings_.damping ? law.cs : 0;
   const BondGeometry& g = block_.bonds[b];
   const Vec3 n = pi.rot(g.normal), xi = pi.rot(g.xi), eta = pi.rot(g.eta);
-  const double share = g.area / 3;
+  const double share = g.area / 3, u_failure = law.u_failure();
   PairForce out;
   for (int k = 0; k < 3; ++k) {
     const Vec3 ri = pi.rot(g.at_master[k]), rj = pj.rot(g.at_slave[k]);
@@ -496,7 +500,7 @@ PairForce FractureSolver::bond_force(std::size_t b, const Pose& pi, const Pose& 
     out.force += F;
     out.torque_j += cross(rj, F);
     out.torque_i -= cross(ri, F);
-    out.failed = out.failed || un >= law.u_failure();
+    out.failed = out.failed || un >= u_failure;
   }
   return out;
 }

@@ -7,7 +7,7 @@
 namespace tessera {
 
 void SphereGrid::reset(double r_top, double r_small, double pad) {
-  r_top_ = r_top;
+  r_top_ = r_top, pad_ = pad;
   classes_ = 1;
   while (classes_ < kClasses && std::ldexp(r_top, -classes_) >= r_small) ++classes_;
   tables_.resize(static_cast<std::size_t>(classes_ * (classes_ + 1) / 2));

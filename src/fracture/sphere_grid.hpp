@@ -14,6 +14,7 @@
 // are marked and skipped, and dropped when they outnumber the live ones).
 #pragma once
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -41,18 +42,19 @@ class SphereGrid {
       if (coarser_only && b > a) break;
       const Table& t = table(b, b < a ? b : a);
       if (t.entries.empty()) continue;
-      int c[3];
-      cell(p, t.inv_width, c);
-      for (int dz = -1; dz <= 1; ++dz)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) {
-            const int x = c[0] + dx, y = c[1] + dy, z = c[2] + dz;
+      // The cells that the cube of half-width r + r_b + pad around p meets (2 or 3 per direction).
+      const double reach = r + std::ldexp(r_top_, -b) + pad_;
+      int lo[3], hi[3];
+      cell(p - Vec3{reach, reach, reach}, t.inv_width, lo);
+      cell(p + Vec3{reach, reach, reach}, t.inv_width, hi);
+      for (int z = lo[2]; z <= hi[2]; ++z)
+        for (int y = lo[1]; y <= hi[1]; ++y)
+          for (int x = lo[0]; x <= hi[0]; ++x)
             for (int e = t.head[hash(x, y, z) & t.mask]; e >= 0;) {
               const Entry& en = t.entries[static_cast<std::size_t>(e)];
               if (en.x == x && en.y == y && en.z == z && en.sphere >= 0) f(en.sphere);
               e = en.next;
             }
-          }
     }
   }
 
@@ -80,7 +82,7 @@ class SphereGrid {
   const Table& table(int b, int q) const { return tables_[static_cast<std::size_t>(b * (b + 1) / 2 + q)]; }
   Table& table(int b, int q) { return tables_[static_cast<std::size_t>(b * (b + 1) / 2 + q)]; }
 
-  double r_top_ = 0;
+  double r_top_ = 0, pad_ = 0;
   int classes_ = 1;
   std::vector<Table> tables_;
   std::vector<std::array<int, kClasses>> where_;  // each sphere's entry in each of its tables
