@@ -87,7 +87,7 @@ int FractureSolver::mark_stale(double horizon) {
 void FractureSolver::reset_grid() {
   double smallest = cell_radius_;
   for (const Sphere& sp : spheres_) smallest = std::min(smallest, sp.radius);
-  grid_.reset(1.5 * cell_radius_, smallest, 2 * skin_);
+  for (SphereGrid& g : grids_) g.reset(1.5 * cell_radius_, smallest, 2 * skin_);
 }
 
 Vec3 FractureSolver::sphere_position(std::size_t s) const {
@@ -166,9 +166,9 @@ void FractureSolver::build_list() {
     const Vec3& p = at[a];
     const int ia = static_cast<int>(a);
     const double r = spheres_[a].radius;
-    const int cls = grid_.size_class(r);
-    grid_.near(p, r, true, [&](int b) {
-      if (b == ia || (b < ia && grid_.size_class(spheres_[static_cast<std::size_t>(b)].radius) == cls)) return;
+    const int cls = grids_[0].size_class(r);
+    near_sphere(a, p, true, [&](int b) {
+      if (b == ia || (b < ia && grids_[0].size_class(spheres_[static_cast<std::size_t>(b)].radius) == cls)) return;
       consider_pair(std::min(ia, b), std::max(ia, b), at[static_cast<std::size_t>(std::min(ia, b))],
                     at[static_cast<std::size_t>(std::max(ia, b))], 0, true);
     });
@@ -187,8 +187,7 @@ void FractureSolver::extend_list() {
   const std::size_t n = spheres_.size();
   for (std::size_t a = listed_spheres_; a < n; ++a) {
     const Vec3 p = sphere_position(a);
-    grid_.near(p, spheres_[a].radius, false,
-               [&](int b) { consider_pair(static_cast<int>(a), b, p, sphere_position(static_cast<std::size_t>(b)), 0, true); });
+    near_sphere(a, p, false, [&](int b) { consider_pair(static_cast<int>(a), b, p, sphere_position(static_cast<std::size_t>(b)), 0, true); });
     const std::size_t e = static_cast<std::size_t>(spheres_[a].element);
     insert_sphere(a, build_x_[e] + build_q_[e].rotate(spheres_[a].centre));  // where its element was searched
   }
@@ -237,13 +236,14 @@ void FractureSolver::refresh_list() {
   for (std::size_t e = 0; e < block_.size(); ++e) {
     if (!stale_[e]) continue;
     build_x_[e] = x_[e], build_q_[e] = q_[e];
-    for (const int a : element_spheres_[e]) grid_.move(a, sphere_position(static_cast<std::size_t>(a)), spheres_[static_cast<std::size_t>(a)].radius);
+    for (const int a : element_spheres_[e])
+      grid_of(static_cast<std::size_t>(a)).move(a, sphere_position(static_cast<std::size_t>(a)), spheres_[static_cast<std::size_t>(a)].radius);
   }
   for (std::size_t e = 0; e < block_.size(); ++e) {
     if (!stale_[e]) continue;
     for (const int a : element_spheres_[e]) {
       const Vec3 p = sphere_position(static_cast<std::size_t>(a));
-      grid_.near(p, spheres_[static_cast<std::size_t>(a)].radius, false, [&](int b) {
+      near_sphere(static_cast<std::size_t>(a), p, false, [&](int b) {
         const std::size_t eb = static_cast<std::size_t>(spheres_[static_cast<std::size_t>(b)].element);
         if (stale_[eb] && (eb < e || (eb == e && b <= a))) return;  // two searched elements: once
         consider_pair(a, b, p, sphere_position(static_cast<std::size_t>(b)), stale_[eb] ? 0.0 : moved_[eb]);

@@ -264,8 +264,19 @@ class FractureSolver {
   // build_q_); spheres up to 1.5 times the largest at the last build (the faces released until the
   // next one); every search padded by 2 skins (a refresh's margin of skin/2 beyond the skin, and a
   // sphere may be skin/2 from where the grid holds it).
+  // Two grids: the spheres of this rank's elements and the others'. A pair is listed where one of
+  // its elements is owned, so a search from another rank's sphere reads only this rank's grid.
   void reset_grid();
-  void insert_sphere(std::size_t s, const Vec3& p) { grid_.insert(static_cast<int>(s), p, spheres_[s].radius); }
+  bool mine(std::size_t sphere) const { return owner_[static_cast<std::size_t>(spheres_[sphere].element)] == decomp_.rank(); }
+  SphereGrid& grid_of(std::size_t s) { return grids_[mine(s) ? 0 : 1]; }
+  void insert_sphere(std::size_t s, const Vec3& p) { grid_of(s).insert(static_cast<int>(s), p, spheres_[s].radius); }
+  // f(b) for every sphere b within reach of sphere a at p that a pair listed here can have (a search
+  // of both grids from this rank's spheres, of this rank's grid from the others'); see SphereGrid::near.
+  template <class F>
+  void near_sphere(std::size_t a, const Vec3& p, bool coarser_only, F&& f) const {
+    grids_[0].near(p, spheres_[a].radius, coarser_only, f);
+    if (mine(a)) grids_[1].near(p, spheres_[a].radius, coarser_only, f);
+  }
   Vec3 sphere_position(std::size_t s) const;
   double stable_dt() const;
 
@@ -332,7 +343,7 @@ class FractureSolver {
   std::vector<std::vector<int>> element_spheres_;
   std::vector<int> unlisted_bonds_;  // released since the list was last made
   std::size_t listed_spheres_ = 0;
-  SphereGrid grid_;
+  SphereGrid grids_[2];  // [0]: this rank's elements' spheres, [1]: the other ranks'
   double cell_radius_ = 0;  // the largest sphere at the last build
   double dt_ = 0, time_ = 0, min_dt_ = 1e300, min_dt_time_ = 0;
   std::vector<int> level_, stable_level_, kick_level_;

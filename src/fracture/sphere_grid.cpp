@@ -2,6 +2,7 @@
 #include "fracture/sphere_grid.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 namespace tessera {
@@ -34,10 +35,10 @@ void SphereGrid::cell(const Vec3& p, double inv_width, int c[3]) {
 
 void SphereGrid::rehash(Table& t, std::size_t buckets) {
   t.head.assign(buckets, -1);
-  t.mask = buckets - 1;
+  t.shift = 64 - std::countr_zero(buckets);
   for (std::size_t e = 0; e < t.entries.size(); ++e) {
     Entry& en = t.entries[e];
-    int& h = t.head[hash(en.x, en.y, en.z) & t.mask];
+    int& h = t.head[hash(en.x, en.y, en.z) >> t.shift];
     en.next = h;
     h = static_cast<int>(e);
   }
@@ -49,14 +50,14 @@ void SphereGrid::insert(int s, const Vec3& p, double r) {
   ++live_;
   for (int q = 0; q <= b; ++q) {
     Table& t = table(b, q);
-    if (t.entries.size() >= t.head.size()) {  // at most one entry per bucket on average
+    if (2 * t.entries.size() >= t.head.size()) {  // at most one entry per two buckets
       rehash(t, std::max<std::size_t>(64, 2 * t.head.size()));
     }
     Entry en{s, -1, 0, 0, 0};
     int c[3];
     cell(p, t.inv_width, c);
     en.x = c[0], en.y = c[1], en.z = c[2];
-    int& h = t.head[hash(en.x, en.y, en.z) & t.mask];
+    int& h = t.head[hash(en.x, en.y, en.z) >> t.shift];
     en.next = h;
     h = static_cast<int>(t.entries.size());
     where_[static_cast<std::size_t>(s)][static_cast<std::size_t>(q)] = h;
@@ -70,7 +71,7 @@ void SphereGrid::move(int s, const Vec3& p, double r) {
     table(b, q).entries[static_cast<std::size_t>(where_[static_cast<std::size_t>(s)][static_cast<std::size_t>(q)])].sphere = -1;
   --live_, ++dead_;
   insert(s, p, r);
-  if (dead_ > live_ + 1024) compact();
+  if (4 * dead_ > live_ + 4096) compact();  // old entries lengthen the chains
 }
 
 void SphereGrid::compact() {

@@ -50,7 +50,7 @@ class SphereGrid {
       for (int z = lo[2]; z <= hi[2]; ++z)
         for (int y = lo[1]; y <= hi[1]; ++y)
           for (int x = lo[0]; x <= hi[0]; ++x)
-            for (int e = t.head[hash(x, y, z) & t.mask]; e >= 0;) {
+            for (int e = t.head[hash(x, y, z) >> t.shift]; e >= 0;) {
               const Entry& en = t.entries[static_cast<std::size_t>(e)];
               if (en.x == x && en.y == y && en.z == z && en.sphere >= 0) f(en.sphere);
               e = en.next;
@@ -66,14 +66,16 @@ class SphereGrid {
   };
   struct Table {
     double inv_width = 1;
-    std::size_t mask = 0;
-    std::vector<int> head;  // power-of-two buckets
+    int shift = 64;         // a bucket is the hash's top 64 - shift bits
+    std::vector<int> head;  // power-of-two buckets, at least twice the entries
     std::vector<Entry> entries;
   };
-  static std::uint32_t hash(int x, int y, int z) {
-    std::uint32_t h = static_cast<std::uint32_t>(x) * 0x9E3779B1u + static_cast<std::uint32_t>(y) * 0x85EBCA77u +
-                      static_cast<std::uint32_t>(z) * 0xC2B2AE3Du;
-    return h ^ (h >> 15);
+  // Fibonacci hashing of the packed cell: the top bits of a 64-bit product mix all three coordinates.
+  static std::uint64_t hash(int x, int y, int z) {
+    const std::uint64_t k = (static_cast<std::uint64_t>(static_cast<std::uint32_t>(x)) << 42) ^
+                            (static_cast<std::uint64_t>(static_cast<std::uint32_t>(y)) << 21) ^
+                            static_cast<std::uint64_t>(static_cast<std::uint32_t>(z));
+    return k * 0x9E3779B97F4A7C15ull;
   }
   static void cell(const Vec3& p, double inv_width, int c[3]);
   static void rehash(Table& t, std::size_t buckets);
