@@ -41,6 +41,14 @@ Cloud make_cloud(std::size_t n, double r_max, double spread) {
   return c;
 }
 
+// Every sphere of the cloud in a grid whose classes reach down to r_small (r_small = 1.5 r_max: one class).
+SphereGrid grid_of(const Cloud& c, double r_max, double r_small, double pad) {
+  SphereGrid g;
+  g.reset(1.5 * r_max, r_small, pad);
+  for (std::size_t s = 0; s < c.at.size(); ++s) g.insert(static_cast<int>(s), c.at[s], c.r[s]);
+  return g;
+}
+
 std::set<int> brute(const Cloud& c, std::size_t a, double pad) {
   std::set<int> out;
   for (std::size_t b = 0; b < c.at.size(); ++b) {
@@ -53,9 +61,7 @@ std::set<int> brute(const Cloud& c, std::size_t a, double pad) {
 TEST(SphereGrid, AQueryReportsEverySphereWithinReachOnce) {
   const double r_max = 0.01, pad = 4e-4;
   Cloud c = make_cloud(3000, r_max, 0.15);
-  SphereGrid g;
-  g.reset(1.5 * r_max, r_max / 40, pad);
-  for (std::size_t s = 0; s < c.at.size(); ++s) g.insert(static_cast<int>(s), c.at[s], c.r[s]);
+  SphereGrid g = grid_of(c, r_max, r_max / 40, pad);
   std::size_t found = 0, reported = 0;
   for (std::size_t a = 0; a < c.at.size(); ++a) {
     std::map<int, int> seen;
@@ -69,9 +75,7 @@ TEST(SphereGrid, AQueryReportsEverySphereWithinReachOnce) {
   }
   EXPECT_GT(found, 3000u);  // the cloud is dense enough that most spheres have partners
   // The point of the classes: far fewer candidates than one class, cells of the largest spheres.
-  SphereGrid one;
-  one.reset(1.5 * r_max, 1.5 * r_max, pad);
-  for (std::size_t s = 0; s < c.at.size(); ++s) one.insert(static_cast<int>(s), c.at[s], c.r[s]);
+  SphereGrid one = grid_of(c, r_max, 1.5 * r_max, pad);
   std::size_t reported_one = 0;
   for (std::size_t a = 0; a < c.at.size(); ++a) one.near(c.at[a], c.r[a], false, [&](int) { ++reported_one; });
   std::printf("candidates: %zu with classes, %zu with one class; %zu within reach\n", reported, reported_one, found);
@@ -81,9 +85,7 @@ TEST(SphereGrid, AQueryReportsEverySphereWithinReachOnce) {
 TEST(SphereGrid, CoarserOnlyQueriesFindEachPairOnceFromItsSmallerSphere) {
   const double r_max = 0.01, pad = 4e-4;
   Cloud c = make_cloud(2000, r_max, 0.12);
-  SphereGrid g;
-  g.reset(1.5 * r_max, r_max / 40, pad);
-  for (std::size_t s = 0; s < c.at.size(); ++s) g.insert(static_cast<int>(s), c.at[s], c.r[s]);
+  SphereGrid g = grid_of(c, r_max, r_max / 40, pad);
   std::set<std::pair<int, int>> expected, got;
   for (std::size_t a = 0; a < c.at.size(); ++a)
     for (int b : brute(c, a, pad))
@@ -103,9 +105,7 @@ TEST(SphereGrid, CoarserOnlyQueriesFindEachPairOnceFromItsSmallerSphere) {
 TEST(SphereGrid, MovedSpheresAreFoundWhereTheyAreNowOnly) {
   const double r_max = 0.01, pad = 4e-4;
   Cloud c = make_cloud(1500, r_max, 0.1);
-  SphereGrid g;
-  g.reset(1.5 * r_max, r_max / 40, pad);
-  for (std::size_t s = 0; s < c.at.size(); ++s) g.insert(static_cast<int>(s), c.at[s], c.r[s]);
+  SphereGrid g = grid_of(c, r_max, r_max / 40, pad);
   // Move every third sphere several times (enough old entries to be dropped more than once).
   for (int round = 0; round < 4; ++round)
     for (std::size_t s = static_cast<std::size_t>(round) % 3; s < c.at.size(); s += 3) {
