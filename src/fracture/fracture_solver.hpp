@@ -335,7 +335,7 @@ class FractureSolver {
   std::vector<double> travel_;
   static constexpr double kGapMargin = 1e-12;  // m: far above the round-off of positions near 1 m
   std::vector<char> stale_;
-  // Storage mark_stale and refresh_list reuse every macro step (speeds, partners' fastest, positions).
+  // Storage reused every macro step: mark_stale's speeds and partners' fastest, build_list's positions.
   std::vector<double> scratch_speed_, scratch_fastest_;
   std::vector<Vec3> scratch_at_;
   GatherBuffers gather_;
