@@ -87,8 +87,15 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
     L->gs = {int(gxs), int(gys), int(gzs)};
     L->gm = {int(gxm), int(gym), int(gzm)};
     L->stride = {1, L->gm[0], std::ptrdiff_t(L->gm[0]) * L->gm[1]};
-    check(DMCreateLocalVector(L->dm, &L->scratch), "DMCreateLocalVector");
-    L->needs_exchange = procs[0] * procs[1] * procs[2] > 1 || grid.periodic(0) || grid.periodic(1) || grid.periodic(2);
+    CellHalo::Block block;
+    block.procs = procs;
+    block.coords = {grid.rank() % procs[0], (grid.rank() / procs[0]) % procs[1], grid.rank() / (procs[0] * procs[1])};
+    for (int d = 0; d < 3; ++d) block.periodic[d] = grid.periodic(d);
+    block.s = L->s;
+    block.m = L->m;
+    block.gs = L->gs;
+    block.gm = L->gm;
+    L->halo = std::make_unique<CellHalo>(grid.comm(), block, 1, CellHalo::Stencil::star);
     const std::size_t size = std::size_t(L->gm[0]) * L->gm[1] * L->gm[2];
     for (auto& c : L->coef) c.assign(size, 0.0f);
     if (levels_.empty())
@@ -123,19 +130,14 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
 }
 
 CellMultigrid::~CellMultigrid() {
-  for (auto& L : levels_) {
-    if (L->scratch) VecDestroy(&L->scratch);
+  for (auto& L : levels_)
     if (L->dm) DMDestroy(&L->dm);
-  }
 }
 
 void CellMultigrid::exchange(Level& L, std::vector<double>& v) {
-  if (!L.needs_exchange) return;
+  if (!L.halo->active()) return;  // one rank, nothing periodic: no ghost has a source
   const double start = MPI_Wtime();
-  check(VecPlaceArray(L.scratch, v.data()), "VecPlaceArray");
-  check(DMLocalToLocalBegin(L.dm, L.scratch, INSERT_VALUES, L.scratch), "DMLocalToLocalBegin");
-  check(DMLocalToLocalEnd(L.dm, L.scratch, INSERT_VALUES, L.scratch), "DMLocalToLocalEnd");
-  check(VecResetArray(L.scratch), "VecResetArray");
+  L.halo->exchange({&v});
   exchange_seconds_ += MPI_Wtime() - start;
 }
 

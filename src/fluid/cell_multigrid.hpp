@@ -23,7 +23,7 @@
 // count (the aggregates, and so the preconditioner, follow the ranks' blocks).
 //
 // Each level lives on its own DMDA with the fine level's process grid and each block's aggregate
-// count as ownership ranges (ghost width 1, filled by DMLocalToLocal); coarsening stops where no
+// count as ownership ranges (ghost width 1, face ghosts filled by fluid/cell_halo.hpp); coarsening stops where no
 // direction can be coarsened or below 256 cells, and the coarsest level gets many sweeps (20 by
 // default).
 #pragma once
@@ -34,6 +34,7 @@
 #include <vector>
 
 #include "fluid/fluid_grid.hpp"
+#include "fluid/cell_halo.hpp"
 
 namespace tessera {
 
@@ -58,8 +59,7 @@ class CellMultigrid {
  private:
   struct Level {
     DM dm = nullptr;
-    Vec scratch = nullptr;
-    bool needs_exchange = true;  // false on one rank without periodic directions: no ghosts to fill
+    std::unique_ptr<CellHalo> halo;  // face ghosts, width 1
     std::array<int, 3> n{}, s{}, m{}, gs{}, gm{};
     std::array<std::ptrdiff_t, 3> stride{};
     // Along each direction, the first cell of the next finer level's aggregate I, global,

@@ -89,28 +89,31 @@ FluidGrid::FluidGrid(const Decomposition& decomp, std::array<int, 3> cells,
       throw RunError("fluid grid: DMDA ownership does not match the DEM decomposition");
   }
   stride_ = {1, gm_[0], std::ptrdiff_t(gm_[0]) * gm_[1]};
-  check(DMCreateLocalVector(da_, &scratch_), "DMCreateLocalVector");
+  CellHalo::Block block;
+  for (int d = 0; d < 3; ++d) block.periodic[d] = periodic(d);
+  block.procs = dims;
+  block.coords = coords;
+  block.s = s_;
+  block.m = m_;
+  block.gs = gs_;
+  block.gm = gm_;
+  halo_ = std::make_unique<CellHalo>(comm_, block, kGhost, CellHalo::Stencil::box);
 }
 
 FluidGrid::~FluidGrid() {
-  if (scratch_) VecDestroy(&scratch_);
+  halo_.reset();
   if (dap_) DMDestroy(&dap_);
   if (da_) DMDestroy(&da_);
   if (comm_ != MPI_COMM_NULL) MPI_Comm_free(&comm_);
 }
 
-void FluidGrid::exchange(std::vector<double>& field) const {
-  if (size_ == 1 && !periodic(0) && !periodic(1) && !periodic(2)) return;  // no ghost has a source
-  const double start = MPI_Wtime();
-  check(VecPlaceArray(scratch_, field.data()), "VecPlaceArray");
-  check(DMLocalToLocalBegin(da_, scratch_, INSERT_VALUES, scratch_), "DMLocalToLocalBegin");
-  check(DMLocalToLocalEnd(da_, scratch_, INSERT_VALUES, scratch_), "DMLocalToLocalEnd");
-  check(VecResetArray(scratch_), "VecResetArray");
-  exchange_seconds_ += MPI_Wtime() - start;
-}
+void FluidGrid::exchange(std::vector<double>& field) const { exchange({&field}); }
 
 void FluidGrid::exchange(std::initializer_list<std::vector<double>*> fields) const {
-  for (auto* f : fields) exchange(*f);
+  if (!halo_->active()) return;  // one rank, nothing periodic: no ghost has a source
+  const double start = MPI_Wtime();
+  halo_->exchange(fields);
+  exchange_seconds_ += MPI_Wtime() - start;
 }
 
 double FluidGrid::sum_owned(const std::vector<double>& values) const {

@@ -9,8 +9,8 @@
 //
 // Fields are plain arrays over the ghosted local box (two ghost layers, box stencil: PLIC normals
 // need the 3x3x3 neighbourhood of a ghost cell). Ghosts between ranks and across periodic
-// boundaries are filled by the DMDA (DMLocalToLocal, no copy); ghosts beyond a wall or an outflow
-// are filled by the boundary conditions of flow_solver.
+// boundaries are filled by fluid/cell_halo.hpp (in place, no copy of the owned cells); ghosts beyond a
+// wall or an outflow are filled by the boundary conditions of flow_solver.
 //
 // Face-normal velocities live in the same layout: face[d] at cell c is the face on c's low side in
 // direction d; the high face of the last owned cell is held by the first ghost cell.
@@ -19,11 +19,13 @@
 #include <petscdmda.h>
 
 #include <array>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "core/decomposition.hpp"
 #include "core/vec3.hpp"
+#include "fluid/cell_halo.hpp"
 
 namespace tessera {
 
@@ -81,7 +83,7 @@ class FluidGrid {
 
   // Fills ghosts from neighbour ranks and periodic images (in place, collective).
   void exchange(std::vector<double>& field) const;
-  // Same for several fields (one message set per field, started together).
+  // Same for several fields (one message per neighbour for all of them).
   void exchange(std::initializer_list<std::vector<double>*> fields) const;
   std::vector<double> make_field(double value = 0.0) const { return std::vector<double>(local_size(), value); }
 
@@ -98,7 +100,7 @@ class FluidGrid {
   MPI_Comm comm_ = MPI_COMM_NULL;
   int rank_ = 0, size_ = 1;
   DM da_ = nullptr, dap_ = nullptr;
-  mutable Vec scratch_ = nullptr;
+  std::unique_ptr<CellHalo> halo_;
   mutable double exchange_seconds_ = 0;
   std::array<int, 3> n_{}, s_{}, m_{}, gs_{}, gm_{};
   std::array<std::ptrdiff_t, 3> stride_{};

@@ -1,0 +1,67 @@
+// SPDX-License-Identifier: MIT
+// The ghost exchange of arrays laid out over a rank's ghosted box of a Cartesian process grid
+// (the flow fields, FluidGrid; the multigrid's levels, CellMultigrid; docs/theory.md F11a).
+//
+// Direction by direction (x, then y, then z), each rank sends the `width` owned layers on each side
+// to the neighbour there and receives that neighbour's into its ghost layers; a direction with one
+// rank and periodic copies its own far layers. With the box stencil, the layers sent along a later
+// direction include the ghosts the earlier directions filled (where a neighbour rank or periodic
+// image exists along them), so edges and corners arrive in two or three hops; with the star stencil
+// only the face ghosts are filled. A ghost beyond a wall or an outflow is never written, as in a
+// PETSc DMDA's DMLocalToLocal with DM_BOUNDARY_GHOSTED, which this replaces: that one's scatter
+// also copied every owned value onto itself through an index list, which cost the flow a tenth of its
+// time on 2 ranks (docs/performance.md, 2026-12-03). Several fields go in one message per side.
+#pragma once
+#include <mpi.h>
+
+#include <array>
+#include <initializer_list>
+#include <vector>
+
+namespace tessera {
+
+class CellHalo {
+ public:
+  enum class Stencil { star, box };
+  // A rank's block: process grid and this rank's coordinates in it (rank = a + procs[0] (b +
+  // procs[1] c) on `comm`, a DMDA's order), the owned box [s, s + m) and the ghosted box
+  // [gs, gs + gm) in global cell indices, x fastest in memory.
+  struct Block {
+    std::array<int, 3> procs{}, coords{};
+    std::array<bool, 3> periodic{};
+    std::array<int, 3> s{}, m{}, gs{}, gm{};
+  };
+  CellHalo(MPI_Comm comm, const Block& block, int width, Stencil stencil);
+  ~CellHalo();
+  CellHalo(const CellHalo&) = delete;
+  CellHalo& operator=(const CellHalo&) = delete;
+
+  // False where no ghost has a source (one rank, nothing periodic): exchange() does nothing.
+  bool active() const { return active_; }
+  // Fills the ghosts of every field (collective over the communicator).
+  void exchange(std::initializer_list<std::vector<double>*> fields) const;
+
+ private:
+  // A box of local (ghosted-array) indices [lo, hi).
+  struct Box {
+    std::array<int, 3> lo{}, hi{};
+    std::size_t size() const { return std::size_t(hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]); }
+  };
+  struct Side {
+    int rank = -1;  // MPI_PROC_NULL-like: -1 where a wall or an outflow lies beyond
+    Box send, recv;
+  };
+  template <class F>
+  void for_rows(const Box& b, F&& fn) const;
+  void pack(const Box& b, const std::vector<double>& f, double* out) const;
+  void unpack(const Box& b, std::vector<double>& f, const double* in) const;
+
+  MPI_Comm comm_ = MPI_COMM_NULL;
+  int me_ = 0;
+  bool active_ = false;
+  std::array<std::ptrdiff_t, 3> stride_{};
+  std::array<std::array<Side, 2>, 3> sides_{};
+  mutable std::array<std::vector<double>, 2> send_buf_, recv_buf_;
+};
+
+}  // namespace tessera
