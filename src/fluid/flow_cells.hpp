@@ -20,6 +20,14 @@ constexpr double kEmpty = 1e-12;
 // kFull rho_g / rho_l (1e-9 for air and water) of its mass. Empty cells do not drift (no flux).
 constexpr double kFull = 1e-6;
 
+// A cell holds an interface (a PLIC plane, a Youngs normal, an interface potential) when f lies
+// between kEmpty and 1 - kFull. A bulk liquid cell's residue of 1e-12 to 1e-9 (above) is not an
+// interface: its Youngs normal is the gradient of that residue, noise, and treating it as one made
+// every cell of a pool an interface cell (the pool drop's lower rank took 1.9 times the upper's
+// interface work; docs/performance.md, 2026-12-03). It fluxes as a full cell, the whole slab: the
+// flux is the same number leaving one cell and entering the next, so the volume stays exact.
+inline bool holds_interface(double f) { return f > kEmpty && f < 1 - kFull; }
+
 // Face viscosity: the harmonic mean of the two cells'. Exact for shear along a layered interface
 // (stresses in series) and bounded by twice the smaller viscosity, so that a gas cell beside the
 // interface keeps close to the gas's explicit viscous limit; the arithmetic mean would give it

@@ -55,7 +55,7 @@ void FlowSolver::interface_potential() {
           [&](int i, int j, int k) {
             const std::size_t c = g.at(i, j, k);
             const double fc = f_[c];
-            if (fc <= kEmpty || fc >= 1 - kEmpty) return;
+            if (!flow_cells::holds_interface(fc)) return;
             double phi = potential(i + 0.5, j + 0.5, k + 0.5);
             // The height function along gravity's main direction: where the column through the cell
             // reaches a full cell below and an empty one above within two cells each way (or the
@@ -115,7 +115,7 @@ void FlowSolver::reconstruct(int d) {
   for_box(lo, hi, [&](int i, int j, int k) {
     const std::size_t c = g.at(i, j, k);
     const double fc = f_[c];
-    if (fc <= kEmpty || fc >= 1 - kEmpty) return;
+    if (!flow_cells::holds_interface(fc)) return;
     double n[3];
     youngs_normal(c, n);
     if (n[0] == 0 && n[1] == 0 && n[2] == 0) n[d] = 1;  // isolated fragment: any plane will do

@@ -274,7 +274,7 @@ void FlowSolver::sweep(int d, double dt, bool last) {
     const double fu = f_[up];
     double vol = 0;
     if (s > 0) {
-      if (fu >= 1 - kEmpty)
+      if (fu >= 1 - kFull)
         vol = s;
       else if (fu > kEmpty) {
         const double n[3] = {plic_[0][up], plic_[1][up], plic_[2][up]};
