@@ -247,12 +247,18 @@ void CellMultigrid::smooth(Level& L, int sweeps, bool reverse, bool from_zero, b
 void CellMultigrid::restrict_residual(Level& L, Level& C) {
   // The residual's rows are cell integrals: a coarse cell's right-hand side is the sum of its fine
   // cells' residuals, taken in the fine level's storage order (a coarse cell's fine cells k, then
-  // j, then i ascending); the aggregates lie within each rank's block.
+  // j, then i ascending); the aggregates lie within each rank's block. The pre-smoothing ends with
+  // a pass over colour 1, which solves those rows given their neighbours, unchanged since: their
+  // residual is zero (to the rounding of x = s / diag), and only colour 0's are summed.
   for_owned(C.s, C.m, [&](int I, int J, int K) { C.b[C.at(I, J, K)] = 0; });
   const int* const agg = C.aggregate_of[0].data() + L.s[0];
-  for_fine_rows(L, C, [&](std::size_t coarse_row, std::size_t c0) {
-    for (int i = 0; i < L.m[0]; ++i) C.b[coarse_row + agg[i] - C.gs[0]] += residual(L, c0 + i);
-  });
+  for (int k = L.s[2]; k < L.s[2] + L.m[2]; ++k)
+    for (int j = L.s[1]; j < L.s[1] + L.m[1]; ++j) {
+      const std::size_t coarse_row = C.at(C.gs[0], C.aggregate_of[1][j], C.aggregate_of[2][k]);
+      const std::size_t c0 = L.at(L.s[0], j, k);
+      for (int i = (L.s[0] + j + k) & 1; i < L.m[0]; i += 2)
+        C.b[coarse_row + agg[i] - C.gs[0]] += residual(L, c0 + i);
+    }
 }
 
 void CellMultigrid::prolong(Level& C, Level& L) {
