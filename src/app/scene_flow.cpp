@@ -62,6 +62,18 @@ struct LiquidShape {
     const Vec3 q{(p.x - a.x) / b.x, (p.y - a.y) / b.y, (p.z - a.z) / b.z};
     return dot(q, q) <= 1;
   }
+  // True when the whole cell [lo, hi] lies inside (both kinds are convex: the eight corners
+  // decide; an ellipsoid's corners within 1e-9 of its surface count as outside, so that no sample
+  // point between them can round to outside).
+  bool contains_cell(const Vec3& lo, const Vec3& hi) const {
+    if (kind == Kind::box) return lo.x >= a.x && hi.x <= b.x && lo.y >= a.y && hi.y <= b.y && lo.z >= a.z && hi.z <= b.z;
+    for (int corner = 0; corner < 8; ++corner) {
+      const Vec3 p{corner & 1 ? hi.x : lo.x, corner & 2 ? hi.y : lo.y, corner & 4 ? hi.z : lo.z};
+      const Vec3 q{(p.x - a.x) / b.x, (p.y - a.y) / b.y, (p.z - a.z) / b.z};
+      if (!(dot(q, q) <= 1 - 1e-9)) return false;
+    }
+    return true;
+  }
   Vec3 box_min() const { return kind == Kind::box ? a : a - b; }
   Vec3 box_max() const { return kind == Kind::box ? b : a + b; }
 };
@@ -186,11 +198,12 @@ class FlowScene final : public SteppedScene {
 void FlowScene::set_initial_state() {
   const FluidGrid& g = flow_->grid();
   const FlowSettings& st = flow_->settings();
+  std::vector<const LiquidShape*> near;
   flow_->initialize([&](int i, int j, int k) {
     const Vec3 lo{g.lo().x + i * g.h(0), g.lo().y + j * g.h(1), g.lo().z + k * g.h(2)};
     const Vec3 hi{lo.x + g.h(0), lo.y + g.h(1), lo.z + g.h(2)};
     // Only shapes whose bounding box meets the cell are sampled.
-    std::vector<const LiquidShape*> near;
+    near.clear();
     for (const auto& s : shapes_) {
       const Vec3 a = s.box_min(), b = s.box_max();
       if (a.x < hi.x && b.x > lo.x && a.y < hi.y && b.y > lo.y && a.z < hi.z && b.z > lo.z) near.push_back(&s);
@@ -200,17 +213,23 @@ void FlowScene::set_initial_state() {
     const int m = samples_;
     int count = 0;
     Vec3 momentum;
-    for (int c = 0; c < m; ++c)
-      for (int b = 0; b < m; ++b)
-        for (int a = 0; a < m; ++a) {
-          const Vec3 p{lo.x + (a + 0.5) / m * g.h(0), lo.y + (b + 0.5) / m * g.h(1), lo.z + (c + 0.5) / m * g.h(2)};
-          for (const auto* s : near)
-            if (s->inside(p)) {
-              ++count;
-              momentum += s->velocity;
-              break;
-            }
-        }
+    if (near.front()->contains_cell(lo, hi)) {
+      // Every sample point lies in the first shape: what the loop below would count.
+      count = m * m * m;
+      momentum = near.front()->velocity * double(count);
+    } else {
+      for (int c = 0; c < m; ++c)
+        for (int b = 0; b < m; ++b)
+          for (int a = 0; a < m; ++a) {
+            const Vec3 p{lo.x + (a + 0.5) / m * g.h(0), lo.y + (b + 0.5) / m * g.h(1), lo.z + (c + 0.5) / m * g.h(2)};
+            for (const auto* s : near)
+              if (s->inside(p)) {
+                ++count;
+                momentum += s->velocity;
+                break;
+              }
+          }
+    }
     cs.liquid_fraction = double(count) / (double(m) * m * m);
     if (count) {
       // Mass-averaged cell velocity: the liquid part moves, the gas part is at rest.
