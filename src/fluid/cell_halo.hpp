@@ -38,6 +38,9 @@ class CellHalo {
 
   // False where no ghost has a source (one rank, nothing periodic): exchange() does nothing.
   bool active() const { return active_; }
+  // Whether an exchange fills the ghost layers on `side` (0 low, 1 high) of direction d (a
+  // neighbour rank or a periodic image lies there; not a wall or an outflow).
+  bool fills(int d, int side) const { return sides_[d][side].rank >= 0; }
   // Fills the ghosts of every field (collective over the communicator).
   void exchange(std::initializer_list<std::vector<double>*> fields) const;
 

@@ -20,6 +20,15 @@ void for_owned(const std::array<int, 3>& s, const std::array<int, 3>& m, F&& fn)
       for (int i = s[0]; i < s[0] + m[0]; ++i) fn(i, j, k);
 }
 
+// Walks level L's owned rows in storage order: each row's first owned cell in the ghosted array,
+// and its first entry in a PETSc vector of the owned cells (x fastest).
+template <class Level, class F>
+void for_rows(const Level& L, F&& fn) {
+  std::size_t n = 0;
+  for (int k = L.s[2]; k < L.s[2] + L.m[2]; ++k)
+    for (int j = L.s[1]; j < L.s[1] + L.m[1]; ++j, n += std::size_t(L.m[0])) fn(L.at(L.s[0], j, k), n);
+}
+
 // The sum of cell c's six face coefficients (an outflow face's included), in a fixed order.
 template <class Level>
 double coefficient_sum(const Level& L, std::size_t c) {
@@ -213,35 +222,58 @@ void CellMultigrid::smooth(Level& L, int sweeps, bool reverse, bool from_zero, b
   const double* const b = L.b.data();
   double* const x = L.x.data();
   const std::ptrdiff_t sy = L.stride[1], sz = L.stride[2];
-  for (int sweep = 0; sweep < sweeps; ++sweep)
-    for (int pass = 0; pass < 2; ++pass) {
-      const int colour = reverse ? 1 - pass : pass;
-      if (from_zero && sweep == 0 && pass == 0) {
-        // x = 0 before: the first colour's cells take b / diag, the others stay 0; every owned
-        // cell is written, so x needs no clearing (its ghosts beyond the domain stay 0).
-        for (int k = L.s[2]; k < L.s[2] + L.m[2]; ++k)
-          for (int j = L.s[1]; j < L.s[1] + L.m[1]; ++j) {
-            const std::size_t row = L.at(L.s[0], j, k);
-            const int first = (L.s[0] + j + k) & 1;
-            for (int i = 0; i < L.m[0]; ++i)
-              x[row + i] = ((first + i) & 1) == colour ? b[row + i] * double(inv[row + i]) : 0.0;
-          }
-      } else {
-        for (int k = L.s[2]; k < L.s[2] + L.m[2]; ++k)
-          for (int j = L.s[1]; j < L.s[1] + L.m[1]; ++j) {
-            int i0 = L.s[0];
-            if (((i0 + j + k) & 1) != colour) ++i0;
-            const std::size_t end = L.at(L.s[0] + L.m[0] - 1, j, k) + 1;
-            for (std::size_t c = L.at(i0, j, k); c < end; c += 2) {
-              const double s = b[c] + double(cf[0][c]) * x[c - 1] + double(cf[0][c + 1]) * x[c + 1] +
-                               double(cf[1][c]) * x[c - sy] + double(cf[1][c + sy]) * x[c + sy] +
-                               double(cf[2][c]) * x[c - sz] + double(cf[2][c + sz]) * x[c + sz];
-              x[c] = s * double(inv[c]);
-            }
-          }
-      }
-      if (last_exchange || sweep + 1 < sweeps || pass == 0) exchange(L, L.x);
+  const std::array<int, 3> s = L.s, e{L.s[0] + L.m[0], L.s[1] + L.m[1], L.s[2] + L.m[2]};
+  // The cells of `colour` in [i_begin, i_end) of row (j, k): x = (b + sum of c_f x_nb) / diag.
+  auto update = [&](int i_begin, int i_end, int j, int k, int colour) {
+    if (((i_begin + j + k) & 1) != colour) ++i_begin;
+    if (i_begin >= i_end) return;
+    const std::size_t end = L.at(i_end - 1, j, k) + 1;
+    for (std::size_t c = L.at(i_begin, j, k); c < end; c += 2) {
+      const double sum = b[c] + double(cf[0][c]) * x[c - 1] + double(cf[0][c + 1]) * x[c + 1] +
+                         double(cf[1][c]) * x[c - sy] + double(cf[1][c + sy]) * x[c + sy] +
+                         double(cf[2][c]) * x[c - sz] + double(cf[2][c + sz]) * x[c + sz];
+      x[c] = sum * double(inv[c]);
     }
+  };
+  // From x = 0, the first colour's cells of a row take b / diag and the others 0: every owned
+  // cell is written, so x needs no clearing (its ghosts beyond the domain stay 0).
+  auto first = [&](int j, int k, int colour) {
+    const std::size_t row = L.at(s[0], j, k);
+    const int parity = (s[0] + j + k) & 1;
+    for (int i = 0; i < L.m[0]; ++i)
+      x[row + i] = ((parity + i) & 1) == colour ? b[row + i] * double(inv[row + i]) : 0.0;
+  };
+  // Cells with no face on a ghost an exchange fills (interior) read only owned cells and ghosts
+  // beyond walls: the second colour's pass over them trails the first colour's by one plane, so a
+  // sweep streams the level once instead of twice. The border cells' second pass waits for the
+  // exchange of the first colour. Each cell reads the same values as in two separate passes: the
+  // same numbers.
+  std::array<int, 3> lo{}, hi{};
+  for (int d = 0; d < 3; ++d) {
+    lo[d] = s[d] + (L.halo->fills(d, 0) ? 1 : 0);
+    hi[d] = std::max(lo[d], e[d] - (L.halo->fills(d, 1) ? 1 : 0));
+  }
+  const int ca = reverse ? 1 : 0, cb = 1 - ca;
+  for (int sweep = 0; sweep < sweeps; ++sweep) {
+    const bool zero = from_zero && sweep == 0;
+    for (int k = s[2]; k <= e[2]; ++k) {
+      if (k < e[2])
+        for (int j = s[1]; j < e[1]; ++j) zero ? first(j, k, ca) : update(s[0], e[0], j, k, ca);
+      if (k - 1 >= lo[2] && k - 1 < hi[2])
+        for (int j = lo[1]; j < hi[1]; ++j) update(lo[0], hi[0], j, k - 1, cb);
+    }
+    exchange(L, L.x);
+    for (int k = s[2]; k < e[2]; ++k)
+      for (int j = s[1]; j < e[1]; ++j) {
+        if (k < lo[2] || k >= hi[2] || j < lo[1] || j >= hi[1]) {
+          update(s[0], e[0], j, k, cb);
+        } else {
+          update(s[0], lo[0], j, k, cb);
+          update(hi[0], e[0], j, k, cb);
+        }
+      }
+    if (last_exchange || sweep + 1 < sweeps) exchange(L, L.x);
+  }
 }
 
 void CellMultigrid::restrict_residual(Level& L, Level& C) {
@@ -288,41 +320,42 @@ void CellMultigrid::cycle(std::size_t l) {
 
 void CellMultigrid::apply_operator(Vec xin, Vec yout) {
   Level& F = *levels_[0];
+  const int nx = F.m[0];
   const PetscScalar* in;
   check(VecGetArrayRead(xin, &in), "VecGetArrayRead");
-  std::size_t n = 0;
-  for_owned(F.s, F.m, [&](int i, int j, int k) { F.x[F.at(i, j, k)] = in[n++]; });
+  for_rows(F, [&](std::size_t row, std::size_t n) { std::copy(in + n, in + n + nx, F.x.data() + row); });
   check(VecRestoreArrayRead(xin, &in), "VecRestoreArrayRead");
   exchange(F, F.x);
   PetscScalar* out;
   check(VecGetArray(yout, &out), "VecGetArray");
-  n = 0;
-  for_owned(F.s, F.m, [&](int i, int j, int k) {
-    const std::size_t c = F.at(i, j, k);
-    double diag = 0;
-    for (int d = 0; d < 3; ++d) diag += F.op_coef[d][c] + F.op_coef[d][c + F.stride[d]];
-    double ax = diag * F.x[c];
-    for (int d = 0; d < 3; ++d) {
-      const std::ptrdiff_t st = F.stride[d];
-      ax -= F.op_coef[d][c] * F.x[c - st] + F.op_coef[d][c + st] * F.x[c + st];
+  const double* const cx = F.op_coef[0].data();
+  const double* const cy = F.op_coef[1].data();
+  const double* const cz = F.op_coef[2].data();
+  const double* const x = F.x.data();
+  const std::ptrdiff_t sy = F.stride[1], sz = F.stride[2];
+  for_rows(F, [&](std::size_t row, std::size_t n) {
+    double* const o = out + n;
+    for (int i = 0; i < nx; ++i) {
+      const std::size_t c = row + i;
+      const double diag = (cx[c] + cx[c + 1]) + (cy[c] + cy[c + sy]) + (cz[c] + cz[c + sz]);
+      o[i] = diag * x[c] - (cx[c] * x[c - 1] + cx[c + 1] * x[c + 1]) - (cy[c] * x[c - sy] + cy[c + sy] * x[c + sy]) -
+             (cz[c] * x[c - sz] + cz[c + sz] * x[c + sz]);
     }
-    out[n++] = ax;
   });
   check(VecRestoreArray(yout, &out), "VecRestoreArray");
 }
 
 void CellMultigrid::apply(Vec xin, Vec yout) {
   Level& F = *levels_[0];
+  const int nx = F.m[0];
   const PetscScalar* in;
   check(VecGetArrayRead(xin, &in), "VecGetArrayRead");
-  std::size_t n = 0;
-  for_owned(F.s, F.m, [&](int i, int j, int k) { F.b[F.at(i, j, k)] = in[n++]; });
+  for_rows(F, [&](std::size_t row, std::size_t n) { std::copy(in + n, in + n + nx, F.b.data() + row); });
   check(VecRestoreArrayRead(xin, &in), "VecRestoreArrayRead");
   cycle(0);
   PetscScalar* out;
   check(VecGetArray(yout, &out), "VecGetArray");
-  n = 0;
-  for_owned(F.s, F.m, [&](int i, int j, int k) { out[n++] = F.x[F.at(i, j, k)]; });
+  for_rows(F, [&](std::size_t row, std::size_t n) { std::copy(F.x.data() + row, F.x.data() + row + nx, out + n); });
   check(VecRestoreArray(yout, &out), "VecRestoreArray");
 }
 

@@ -195,9 +195,13 @@ double FlowSolver::stable_dt(std::string& limit) const {
   double nu = 0;
   for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)}, [&](int i, int j, int k) {
     const std::size_t c = g.at(i, j, k);
-    double m = mu_[c];
+    // A face between equal viscosities has that viscosity (the harmonic mean's formula only
+    // rounds it): the mean is taken where the two differ.
+    const double mc = mu_[c];
+    double m = mc;
     for (int d = 0; d < 3; ++d)
-      m = std::max({m, face_viscosity(mu_[c], mu_[c - g.stride(d)]), face_viscosity(mu_[c], mu_[c + g.stride(d)])});
+      for (const double mn : {mu_[c - g.stride(d)], mu_[c + g.stride(d)]})
+        if (mn != mc) m = std::max(m, face_viscosity(mc, mn));
     nu = std::max(nu, m / rho_[c]);
   });
   nu = g.reduce_max(nu);
@@ -372,10 +376,13 @@ PoissonStats FlowSolver::project(double dt, bool with_gravity) {
       }
       const double rho_f = 0.5 * (rho_[c - st] + rho_[c]);
       b[c] = gravity[d];
-      if (gravity_on && rho_[c] != rho_[c - st]) {
+      const double p0 = gravity_on ? interface_phi_[c - st] : 0.0, p1 = gravity_on ? interface_phi_[c] : 0.0;
+      if (gravity_on && rho_[c] != rho_[c - st] && !(std::isnan(p0) && std::isnan(p1))) {
         // The two cells' interface potentials weighted by f (1 - f): a cell holding a round-off
         // residue of liquid has its plane at a corner and must not count. Neither: the face's.
-        const double p0 = interface_phi_[c - st], p1 = interface_phi_[c];
+        // Where neither cell holds an interface (both NaN: bulk liquid whose f is within round-off
+        // of 1, or a jump on the face itself), the face's potential makes the formula g_d exactly
+        // (up to rounding), and b_f = g_d is kept.
         const double w0 = std::isnan(p0) ? 0.0 : f_[c - st] * (1 - f_[c - st]);
         const double w1 = std::isnan(p1) ? 0.0 : f_[c] * (1 - f_[c]);
         const double phi_i = w0 + w1 > 0 ? (w0 * (w0 > 0 ? p0 : 0.0) + w1 * (w1 > 0 ? p1 : 0.0)) / (w0 + w1)
