@@ -243,37 +243,52 @@ void CellMultigrid::smooth(Level& L, int sweeps, bool reverse, bool from_zero, b
     for (int i = 0; i < L.m[0]; ++i)
       x[row + i] = ((parity + i) & 1) == colour ? b[row + i] * double(inv[row + i]) : 0.0;
   };
-  // Cells with no face on a ghost an exchange fills (interior) read only owned cells and ghosts
-  // beyond walls: the second colour's pass over them trails the first colour's by one plane, so a
-  // sweep streams the level once instead of twice. The border cells' second pass waits for the
-  // exchange of the first colour. Each cell reads the same values as in two separate passes: the
-  // same numbers.
-  std::array<int, 3> lo{}, hi{};
+  // A pass reads the other colour's values of the pass before. Over the cells at depth >= p from
+  // every side whose ghosts an exchange fills (a neighbour rank or a periodic image), pass p reads
+  // only cells that pass p - 1 has reached in the same stream, if it trails pass p - 1 by a plane:
+  // all the sweeps' passes go down the level in one stream, each a plane behind the one before.
+  // The shells left (depth < p) take pass p after an exchange, in pass order. Every cell reads the
+  // same values as in separate passes with an exchange after each: the same numbers, with as
+  // many exchanges, and the level streamed once instead of once a pass.
+  const int passes = 2 * sweeps;
+  std::array<int, 3> fill_lo{}, fill_hi{};
   for (int d = 0; d < 3; ++d) {
-    lo[d] = s[d] + (L.halo->fills(d, 0) ? 1 : 0);
-    hi[d] = std::max(lo[d], e[d] - (L.halo->fills(d, 1) ? 1 : 0));
+    fill_lo[d] = L.halo->fills(d, 0) ? 1 : 0;
+    fill_hi[d] = L.halo->fills(d, 1) ? 1 : 0;
   }
-  const int ca = reverse ? 1 : 0, cb = 1 - ca;
-  for (int sweep = 0; sweep < sweeps; ++sweep) {
-    const bool zero = from_zero && sweep == 0;
-    for (int k = s[2]; k <= e[2]; ++k) {
-      if (k < e[2])
-        for (int j = s[1]; j < e[1]; ++j) zero ? first(j, k, ca) : update(s[0], e[0], j, k, ca);
-      if (k - 1 >= lo[2] && k - 1 < hi[2])
-        for (int j = lo[1]; j < hi[1]; ++j) update(lo[0], hi[0], j, k - 1, cb);
+  // The cells at depth >= p: [lo, hi).
+  auto deep = [&](int p, std::array<int, 3>& lo, std::array<int, 3>& hi) {
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(s[d] + p * fill_lo[d], e[d]);
+      hi[d] = std::max(lo[d], e[d] - p * fill_hi[d]);
     }
+  };
+  auto colour_of = [&](int p) { return (p & 1) == (reverse ? 1 : 0) ? 0 : 1; };
+  std::vector<std::array<int, 3>> lo(passes), hi(passes);
+  for (int p = 0; p < passes; ++p) deep(p, lo[p], hi[p]);
+  for (int k = s[2]; k < e[2] + passes - 1; ++k)
+    for (int p = 0; p < passes; ++p) {
+      const int kp = k - p;
+      if (kp < lo[p][2] || kp >= hi[p][2]) continue;
+      if (p == 0 && from_zero) {
+        for (int j = s[1]; j < e[1]; ++j) first(j, kp, colour_of(0));
+        continue;
+      }
+      for (int j = lo[p][1]; j < hi[p][1]; ++j) update(lo[p][0], hi[p][0], j, kp, colour_of(p));
+    }
+  for (int p = 1; p < passes; ++p) {
     exchange(L, L.x);
     for (int k = s[2]; k < e[2]; ++k)
       for (int j = s[1]; j < e[1]; ++j) {
-        if (k < lo[2] || k >= hi[2] || j < lo[1] || j >= hi[1]) {
-          update(s[0], e[0], j, k, cb);
+        if (k < lo[p][2] || k >= hi[p][2] || j < lo[p][1] || j >= hi[p][1]) {
+          update(s[0], e[0], j, k, colour_of(p));
         } else {
-          update(s[0], lo[0], j, k, cb);
-          update(hi[0], e[0], j, k, cb);
+          update(s[0], lo[p][0], j, k, colour_of(p));
+          update(hi[p][0], e[0], j, k, colour_of(p));
         }
       }
-    if (last_exchange || sweep + 1 < sweeps) exchange(L, L.x);
   }
+  if (last_exchange) exchange(L, L.x);
 }
 
 void CellMultigrid::restrict_residual(Level& L, Level& C) {
