@@ -80,8 +80,10 @@ class CellMultigrid {
     }
   };
   void exchange(Level& L, std::vector<double>& v);
-  // Red-black sweeps; `from_zero`: x starts at 0 (its first pass reads no neighbour); the
-  // exchange after the last pass is left out where `last_exchange` is false (no ghost is read next).
+  // Red-black sweeps, all passes in one stream down the level, each a plane behind the one before,
+  // the cells beside exchanged ghosts after an exchange per pass (theory F9a); `from_zero`: x
+  // starts at 0 (its first pass reads no neighbour); the exchange after the last pass is left out
+  // where `last_exchange` is false (no ghost is read next).
   void smooth(Level& L, int sweeps, bool reverse, bool from_zero = false, bool last_exchange = true);
   // The residual b - A x of level l, summed into the next coarser level's b (restriction).
   void restrict_residual(Level& L, Level& C);
