@@ -264,27 +264,28 @@ void CellMultigrid::smooth(Level& L, int sweeps, bool reverse, bool from_zero, b
     }
   };
   auto colour_of = [&](int p) { return (p & 1) == (reverse ? 1 : 0) ? 0 : 1; };
-  std::vector<std::array<int, 3>> lo(passes), hi(passes);
-  for (int p = 0; p < passes; ++p) deep(p, lo[p], hi[p]);
+  std::array<int, 3> lo{}, hi{};
   for (int k = s[2]; k < e[2] + passes - 1; ++k)
     for (int p = 0; p < passes; ++p) {
       const int kp = k - p;
-      if (kp < lo[p][2] || kp >= hi[p][2]) continue;
+      deep(p, lo, hi);
+      if (kp < lo[2] || kp >= hi[2]) continue;
       if (p == 0 && from_zero) {
         for (int j = s[1]; j < e[1]; ++j) first(j, kp, colour_of(0));
         continue;
       }
-      for (int j = lo[p][1]; j < hi[p][1]; ++j) update(lo[p][0], hi[p][0], j, kp, colour_of(p));
+      for (int j = lo[1]; j < hi[1]; ++j) update(lo[0], hi[0], j, kp, colour_of(p));
     }
   for (int p = 1; p < passes; ++p) {
     exchange(L, L.x);
+    deep(p, lo, hi);
     for (int k = s[2]; k < e[2]; ++k)
       for (int j = s[1]; j < e[1]; ++j) {
-        if (k < lo[p][2] || k >= hi[p][2] || j < lo[p][1] || j >= hi[p][1]) {
+        if (k < lo[2] || k >= hi[2] || j < lo[1] || j >= hi[1]) {
           update(s[0], e[0], j, k, colour_of(p));
         } else {
-          update(s[0], lo[p][0], j, k, colour_of(p));
-          update(hi[p][0], e[0], j, k, colour_of(p));
+          update(s[0], lo[0], j, k, colour_of(p));
+          update(hi[0], e[0], j, k, colour_of(p));
         }
       }
   }
