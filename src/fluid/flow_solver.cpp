@@ -20,13 +20,13 @@ using flow_cells::kFull;
 
 namespace {
 
+// F7's bound on a cell's new velocity: the range of the old ones widened by this share of their
+// magnitudes (the dilatation term moves an upwind update off the range by the Poisson tolerance).
+constexpr double kMomentumBoundSlack = 1e-12;
+
 // van Leer limited slope from the two one-sided differences.
 inline double van_leer(double a, double b) { return a * b > 0 ? 2 * a * b / (a + b) : 0.0; }
 
-// One phase throughout (no interface in the cells): there the limited slope is safe.
-inline bool one_phase(double a, double b, double c) {
-  return (a <= kEmpty && b <= kEmpty && c <= kEmpty) || (a >= 1 - kFull && b >= 1 - kFull && c >= 1 - kFull);
-}
 
 }  // namespace
 
@@ -40,6 +40,7 @@ FlowSolver::FlowSolver(const Decomposition& decomp, const FlowSettings& settings
   mu_ = g.make_field();
   indicator_ = g.make_field();
   dilatation_ = g.make_field();
+  upwind_cell_ = g.make_field();
   rhs_ = g.make_field();
   flux_f_ = g.make_field();
   flux_m_ = g.make_field();
@@ -289,21 +290,16 @@ void FlowSolver::sweep(int d, double dt, bool last) {
     const double flux_m = rg * v * dt / h + dr * flux_f;  // mass, per cell volume (F6)
     flux_f_[c] = flux_f;
     flux_m_[c] = flux_m;
-    // The advected velocity: van Leer limited upwind value inside one phase; plain upwind where
-    // the stencil holds the interface (there a limited value weighted by the other phase's mass
-    // flux is not a convex combination and amplifies round-off at a density ratio of 1000).
-    const bool smooth =
-        forward ? one_phase(f_[c - 2 * st], f_[c - st], f_[c]) : one_phase(f_[c - st], f_[c], f_[c + st]);
+    // The advected velocity: the upwind value plus half its van Leer limited slope times (1 - s);
+    // bound_momentum_fluxes() takes the plain upwind value where that would overshoot (F7).
     for (int q = 0; q < 3; ++q) {
       const auto& u = u_[q];
-      double face;
-      if (forward)
-        face = u[c - st] + (smooth ? 0.5 * (1 - s) * van_leer(u[c - st] - u[c - 2 * st], u[c] - u[c - st]) : 0.0);
-      else
-        face = u[c] - (smooth ? 0.5 * (1 - s) * van_leer(u[c] - u[c - st], u[c + st] - u[c]) : 0.0);
+      const double face = forward ? u[c - st] + 0.5 * (1 - s) * van_leer(u[c - st] - u[c - 2 * st], u[c] - u[c - st])
+                                  : u[c] - 0.5 * (1 - s) * van_leer(u[c] - u[c - st], u[c + st] - u[c]);
       flux_q_[q][c] = flux_m * face;
     }
   });
+  bound_momentum_fluxes(d, dt, last, lo, hi);
   for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)}, [&](int i, int j, int k) {
     const std::size_t c = g.at(i, j, k);
     // The sweeps' dilatation terms add up to dt div(u_f), zero up to the Poisson tolerance. The last
@@ -329,6 +325,50 @@ void FlowSolver::sweep(int d, double dt, bool last) {
   g.exchange({&f_, &u_[0], &u_[1], &u_[2]});
   fill_fraction_ghosts(f_);
   fill_velocity_ghosts(u_);
+}
+
+void FlowSolver::bound_momentum_fluxes(int d, double dt, bool last, const std::array<int, 3>& face_lo,
+                                       const std::array<int, 3>& face_hi) {
+  // F7's bound: a cell whose new velocity (any component) would leave the range of its own and its
+  // two neighbours' along d takes the plain upwind value on both its faces, which makes its update
+  // a convex combination of those velocities. Marks only grow, so the rounds end (at worst with
+  // every face upwind); the marks are exchanged so that both ranks of a face choose alike.
+  const FluidGrid& g = *grid_;
+  const double h = g.h(d);
+  const std::ptrdiff_t st = g.stride(d);
+  const double rg = settings_.gas.density, dr = settings_.liquid.density - rg;
+  const auto& uf = uf_[d];
+  std::fill(upwind_cell_.begin(), upwind_cell_.end(), 0.0);
+  while (true) {
+    double marked = 0;
+    for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)}, [&](int i, int j, int k) {
+      const std::size_t c = g.at(i, j, k);
+      if (upwind_cell_[c] != 0) return;
+      const double div = last ? -dilatation_[c] : (uf[c + st] - uf[c]) * dt / h;  // as the update's (F4)
+      const double cc = indicator_[c];
+      const double f_new = f_[c] - (flux_f_[c + st] - flux_f_[c]) + cc * div;
+      const double rho_old = rg + dr * f_[c], rho_new = rg + dr * f_new, rho_cc = rg + dr * cc;
+      for (int q = 0; q < 3; ++q) {
+        const auto& u = u_[q];
+        const double m = rho_old * u[c] - (flux_q_[q][c + st] - flux_q_[q][c]) + rho_cc * work_[q][c] * div;
+        const double lo = std::min({u[c - st], u[c], u[c + st]}), hi = std::max({u[c - st], u[c], u[c + st]});
+        const double slack = kMomentumBoundSlack * (std::abs(lo) + std::abs(hi)) + 1e-14;
+        if (m < (lo - slack) * rho_new || m > (hi + slack) * rho_new) {
+          upwind_cell_[c] = 1;
+          marked += 1;
+          return;
+        }
+      }
+    });
+    if (g.reduce_sum(marked) == 0) return;
+    g.exchange(upwind_cell_);
+    for_box(face_lo, face_hi, [&](int i, int j, int k) {
+      const std::size_t c = g.at(i, j, k);
+      if (upwind_cell_[c] == 0 && upwind_cell_[c - st] == 0) return;
+      const std::size_t up = uf[c] > 0 ? c - st : c;
+      for (int q = 0; q < 3; ++q) flux_q_[q][c] = flux_m_[c] * u_[q][up];
+    });
+  }
 }
 
 PoissonStats FlowSolver::project(double dt, bool with_gravity) {

@@ -134,7 +134,7 @@ namespace {
 // momentum, the drop's (liquid) momentum and kinetic energy, and its extent across the motion after
 // each step.
 struct HeavyDrop {
-  std::vector<double> total, drop, energy;  // x-momentum of all, of the liquid; the liquid's KE
+  std::vector<double> total, drop, energy, energy_all;  // x-momentum of all, of the liquid; the liquid's KE, all KE
   std::vector<double> extent;  // the liquid's rms extent across the motion (y)
   double volume0 = 0, volume = 0, extent0 = 0;
   double travelled = 0;
@@ -155,8 +155,8 @@ HeavyDrop periodic_heavy_drop(MPI_Comm comm, int steps) {
     return FlowSolver::CellState{f, {f > 0 ? 1.0 : 0.0, 0, 0}};  // mass-averaged: the drop's cells move
   });
   const FluidGrid& g = s.grid();
-  auto sums = [&](double out[5]) {  // P_x, P_x of the liquid, KE of the liquid, V_liquid, sum f V (y - y_c)^2
-    double local[5] = {0, 0, 0, 0, 0};
+  auto sums = [&](double out[6]) {  // P_x, P_x of the liquid, KE of the liquid, V_liquid, sum f V (y - y_c)^2
+    double local[6] = {0, 0, 0, 0, 0, 0};
     for (int k = g.begin(2); k < g.end(2); ++k)
       for (int j = g.begin(1); j < g.end(1); ++j)
         for (int i = g.begin(0); i < g.end(0); ++i) {
@@ -168,14 +168,15 @@ HeavyDrop periodic_heavy_drop(MPI_Comm comm, int steps) {
           local[0] += m * u;
           local[1] += ml * u;
           local[2] += 0.5 * ml * speed2;
+          local[5] += 0.5 * m * speed2;
           local[3] += f * g.cell_volume();
           const Vec3 x = g.centre(i, j, k);
           local[4] += f * g.cell_volume() * (x.y - centre.y) * (x.y - centre.y);
         }
-    MPI_Allreduce(local, out, 5, MPI_DOUBLE, MPI_SUM, comm);
+    MPI_Allreduce(local, out, 6, MPI_DOUBLE, MPI_SUM, comm);
   };
   HeavyDrop out;
-  double v[5];
+  double v[6];
   sums(v);
   out.volume0 = v[3];
   out.extent0 = std::sqrt(v[4] / v[3]);
@@ -189,6 +190,7 @@ HeavyDrop periodic_heavy_drop(MPI_Comm comm, int steps) {
     out.total.push_back(v[0]);
     out.drop.push_back(v[1]);
     out.energy.push_back(v[2]);
+    out.energy_all.push_back(v[5]);
     out.extent.push_back(std::sqrt(v[4] / v[3]));
   }
   out.volume = v[3];
@@ -201,13 +203,19 @@ HeavyDrop periodic_heavy_drop(MPI_Comm comm, int steps) {
 TEST(FlowRanks, HeavyDropCrossesAPeriodicBoxConservingMomentum) {
   // Issue 18. No walls, no gravity: the total momentum is conserved by the scheme in one fluid
   // (C8's flow test) and here, across the 1000 : 1 interface, up to F10's density-jump residual,
-  // which a drive-free drop keeps small: bound 1e-9 of the momentum (measured 1.8e-14). The drop
-  // loses momentum only to the air, so its kinetic energy falls at every step; its volume is kept to
-  // round-off. Shape: no surface tension holds it, so the air's stagnation pressure flattens it;
-  // over three box crossings (60 ms, T* = t U / D sqrt(rho_g / rho_l) = 0.35) its rms extent across
-  // the motion grows at every crossing (1.25 -> 1.31, 1.42, 1.51 mm, measured), a guard bounds it at
-  // 1.5 times the start (the drop stays one compact body). 1 and 4 ranks agree to 1e-6 of the
-  // momentum (the Poisson tolerance through CG's rank-ordered sums; measured 0 to 1.6e-19).
+  // which a drive-free drop keeps small: bound 1e-9 of the momentum (measured 2.1e-14). The drop
+  // loses momentum only to the air. Energy: with no drive the whole kinetic energy can only fall
+  // (viscous dissipation). F7's bounded limited flux keeps every new velocity inside its
+  // neighbours' range, but unlike plain upwind it is not energy stable step by step: checked is
+  // the integral law, the whole energy never above its start (no source) and both it and the
+  // drop's lower after every crossing than before (the rises at single steps are reported:
+  // measured twice, by 6e-5 of the energy, in the first 10 steps while the impulsive start's
+  // velocity jump at the interface is smoothed). The drop's volume is kept to round-off. Shape:
+  // no surface tension holds it, so the air's stagnation pressure flattens it; over three box
+  // crossings (60 ms, T* = t U / D sqrt(rho_g / rho_l) = 0.35) its rms extent across the motion
+  // grows at every crossing (1.25 -> 1.30, 1.39, 1.49 mm, measured), a guard bounds it at 1.5
+  // times the start (the drop stays one compact body). 1 and 4 ranks agree to 1e-6 of the
+  // momentum (the Poisson tolerance through CG's rank-ordered sums; measured 0 to 1.4e-19).
   const int rank = test::world_rank();
   const int steps = 300;
   const HeavyDrop four = periodic_heavy_drop(MPI_COMM_WORLD, steps);
@@ -216,19 +224,26 @@ TEST(FlowRanks, HeavyDropCrossesAPeriodicBoxConservingMomentum) {
   const double p0 = one.total.front();
   double drift = 0, rank_diff = 0;
   int energy_rises = 0;
+  double largest_rise = 0, highest = 0;  // of the whole kinetic energy
   for (int n = 0; n < steps; ++n) {
     drift = std::max(drift, std::abs(one.total[n] - p0));
     rank_diff = std::max(rank_diff, std::abs(one.drop[n] - four.drop[n]));
-    energy_rises += n > 0 && one.energy[n] > one.energy[n - 1];
+    energy_rises += n > 0 && one.energy_all[n] > one.energy_all[n - 1];
+    largest_rise = std::max(largest_rise, n > 0 ? (one.energy_all[n] - one.energy_all[n - 1]) / one.energy_all[n] : 0.0);
+    highest = std::max(highest, one.energy_all[n]);
   }
   std::printf("heavy drop, %d steps (%.3g box lengths): total momentum drift %.3e of %.4e kg m/s (%.1e); drop momentum %.4e -> %.4e; "
-              "KE rises %d times; volume %.3e; rms extent across %.4f mm at the start, %.4f %.4f %.4f after 1, 2, 3 crossings; 1 vs 4 ranks %.3e\n",
-              steps, one.travelled / 0.02, drift, p0, drift / p0, one.drop.front(), one.drop.back(), energy_rises,
+              "KE rises %d times (largest %.1e of it); volume %.3e; rms extent across %.4f mm at the start, %.4f %.4f %.4f after 1, 2, 3 crossings; 1 vs 4 ranks %.3e\n",
+              steps, one.travelled / 0.02, drift, p0, drift / p0, one.drop.front(), one.drop.back(), energy_rises, largest_rise,
               (one.volume - one.volume0) / one.volume0, one.extent0 * 1e3, one.extent[99] * 1e3, one.extent[199] * 1e3,
               one.extent[299] * 1e3, rank_diff);
   EXPECT_LT(drift, 1e-9 * p0);
   EXPECT_LT(one.drop.back(), one.drop.front());
-  EXPECT_EQ(energy_rises, 0);
+  EXPECT_LE(highest, one.energy_all.front());
+  for (int n : {99, 199, 299}) {
+    EXPECT_LT(one.energy_all[n], one.energy_all[n - 99]);
+    EXPECT_LT(one.energy[n], one.energy[n - 99]);
+  }
   EXPECT_LT(std::abs(one.volume - one.volume0), 1e-12 * one.volume0);
   EXPECT_GT(one.extent[99], one.extent0);
   EXPECT_GT(one.extent[199], one.extent[99]);
