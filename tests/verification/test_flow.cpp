@@ -518,8 +518,10 @@ TEST(RayleighTaylor, LinearGrowthRateAgainstViscousTheory) {
 // radius a(t) = sqrt(3 R V t) (Wagner's theory, Riboux & Gordillo 2014), against the geometric
 // sqrt(2 R V t) of a sphere cut by the wall. A quarter of the drop (symmetry planes x = 0, y = 0),
 // water in air, R = 1 mm, V = 1 m/s, no gravity, touching at t = 0. a(t): along y = 0 in the wall's
-// cell layer, the furthest point where the liquid fraction reaches 1/2 (interpolated between cells).
-double wetted_radius_exponent(int cells_per_diameter, std::vector<std::pair<double, double>>& samples) {
+// cell layer, the furthest point where the liquid fraction reaches 1/2 (interpolated between cells);
+// peaks: where the pressure in that layer peaks along y = 0 (the largest local maximum).
+double wetted_radius_exponent(int cells_per_diameter, std::vector<std::pair<double, double>>& samples,
+                              std::vector<std::pair<double, double>>& peaks) {
   const double R = 1e-3, V = 1.0, L = 1.6 * R, H = 2.4 * R;
   const int n = static_cast<int>(std::lround(cells_per_diameter * L / (2 * R)));
   const int nz = static_cast<int>(std::lround(cells_per_diameter * H / (2 * R)));
@@ -542,6 +544,7 @@ double wetted_radius_exponent(int cells_per_diameter, std::vector<std::pair<doub
   });
   double t = 0;
   samples.clear();
+  peaks.clear();
   while (t < 0.2 * R / V) {
     std::string limit;
     const double dt = std::min(s.stable_dt(limit), 0.002 * R / V);
@@ -555,7 +558,20 @@ double wetted_radius_exponent(int cells_per_diameter, std::vector<std::pair<doub
         if (f0 >= 0.5 && f1 < 0.5) a = std::max(a, (i + 0.5 + (f0 - 0.5) / (f0 - f1)) * g.h(0));
       }
     a = g.reduce_max(a);
-    if (t > 0.02 * R / V) samples.emplace_back(t, a);
+    // The wall pressure's peak along y = 0 (parabola through the largest cell and its neighbours).
+    double peak = -1e300, at = 0;
+    if (g.begin(1) == 0 && g.begin(2) == 0)
+      for (int i = std::max(g.begin(0), 1); i < std::min(g.end(0), n - 1); ++i) {
+        const double pm = s.pressure()[g.at(i - 1, 0, 0)], p0 = s.pressure()[g.at(i, 0, 0)], pp = s.pressure()[g.at(i + 1, 0, 0)];
+        if (p0 >= pm && p0 > pp && p0 > peak) {
+          peak = p0;
+          const double curv = pm - 2 * p0 + pp;
+          at = (i + 0.5 + (curv < 0 ? 0.5 * (pm - pp) / curv : 0.0)) * g.h(0);
+        }
+      }
+    const double top = g.reduce_max(peak);
+    const double r_peak = g.reduce_max(peak == top ? at : 0.0);
+    if (t > 0.02 * R / V) samples.emplace_back(t, a), peaks.emplace_back(t, r_peak);
   }
   // Least squares of a^2 = c R V t: c.
   double num = 0, den = 0;
@@ -563,16 +579,21 @@ double wetted_radius_exponent(int cells_per_diameter, std::vector<std::pair<doub
   return num / den / (R * V);
 }
 
-// What is checked: a(t) grows as t^(1/2) (the log-log slope of a over the window: measured 0.324,
-// 0.449, 0.491 at 20, 40, 80 cells per diameter, converging; bounds 0.25, 0.1, 0.05)
+// What is checked: a(t) grows as t^(1/2) (the log-log slope of a over the window: measured 0.333,
+// 0.458, 0.501 at 20, 40, 80 cells per diameter, converging; bounds 0.25, 0.1, 0.05)
 // and ahead of the geometric circle (a^2 / (R V t) above 2: the pressure pushes liquid out ahead of
-// the sphere's intersection, as Wagner's theory says). Wagner's prefactor 3 itself is reported, not
-// bounded: measured 2.72, 3.17 and 3.53 at 20, 40 and 80 cells per diameter (2026-11-30), rising
-// with the grid, because the footprint at f = 1/2 in the wall's cell layer takes in more of the
-// lamella as the layer thins; the turnover point itself is not resolved by this definition.
-void check_wetting(int cells, double slope_bound) {
-  std::vector<std::pair<double, double>> samples;
-  const double c = wetted_radius_exponent(cells, samples);
+// the sphere's intersection, as Wagner's theory says). Wagner's prefactor 3 is bracketed, not
+// matched: the footprint at f = 1/2 in the wall's cell layer takes in the lamella's foot, which
+// runs ahead of the turnover point (measured a^2 = 2.77, 3.26, 3.66 R V t, rising with the grid as
+// the layer thins), and the wall pressure's peak, which Wagner's theory puts at the turnover point,
+// sits behind it where the lamella's root is not resolved (r^2 = 1.42 (noisy), 2.04, 2.36 R V t,
+// rising). On 40 and 80 cells the two lie on either side of 3 (2026-12-03).
+void check_wetting(int cells, double slope_bound, bool bracket) {
+  std::vector<std::pair<double, double>> samples, peaks;
+  const double c = wetted_radius_exponent(cells, samples, peaks);
+  double num = 0, den = 0;  // least squares of r_peak^2 = c_peak R V t
+  for (const auto& [tt, rr] : peaks) num += rr * rr * tt, den += tt * tt;
+  const double c_peak = num / den / (1e-3 * 1.0);
   const auto& [t0, a0] = samples.front();
   const auto& [t1, a1] = samples.back();
   const double slope = std::log(a1 / a0) / std::log(t1 / t0);
@@ -581,20 +602,27 @@ void check_wetting(int cells, double slope_bound) {
                 slope);
     for (std::size_t m = 0; m < samples.size(); m += samples.size() / 5 + 1)
       std::printf("  t %.3f ms a %.3f mm", samples[m].first * 1e3, samples[m].second * 1e3);
+    std::printf("\n  the wall pressure's peak: r^2 = %.3f R V t;", c_peak);
+    for (std::size_t m = 0; m < peaks.size(); m += peaks.size() / 5 + 1)
+      std::printf("  t %.3f ms r %.3f mm", peaks[m].first * 1e3, peaks[m].second * 1e3);
     std::printf("\n");
   }
   EXPECT_NEAR(slope, 0.5, slope_bound) << cells;
   EXPECT_GT(c, 2.0) << cells;
+  if (bracket) {
+    EXPECT_LT(c_peak, 3.0) << cells;
+    EXPECT_GT(c, 3.0) << cells;
+  }
 }
 
 TEST(DropOnWall, WettedRadiusGrowsAsTheSquareRootOfTime) {
-  check_wetting(20, 0.25);  // the first samples hold the initial lay-out's footprint (measured 0.32)
-  check_wetting(40, 0.1);
+  check_wetting(20, 0.25, false);  // the first samples hold the initial lay-out's footprint (measured 0.33)
+  check_wetting(40, 0.1, true);
 }
 
 // The finer grid of docs/validation.md (about 50 s), kept out of the default run by its prefix and run
 // by the ctest entry test_flow_verification.wetting_fine (label `slow`: `ctest -L slow`).
-TEST(DropOnWall, DISABLED_WettedRadiusOn80CellsPerDiameter) { check_wetting(80, 0.05); }
+TEST(DropOnWall, DISABLED_WettedRadiusOn80CellsPerDiameter) { check_wetting(80, 0.05, true); }
 
 // Spalding's law of the wall (fluid.wall_model: spalding). Its inverse against the explicit
 // y+(u+) formula (Spalding 1961): factor = y+/u+ to 1e-10 over the sublayer, buffer and log
