@@ -299,7 +299,7 @@ void FlowSolver::sweep(int d, double dt, bool last) {
       flux_q_[q][c] = flux_m * face;
     }
   });
-  bound_momentum_fluxes(d, dt, last, lo, hi);
+  bound_momentum_fluxes(d, dt, last);
   for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)}, [&](int i, int j, int k) {
     const std::size_t c = g.at(i, j, k);
     // The sweeps' dilatation terms add up to dt div(u_f), zero up to the Poisson tolerance. The last
@@ -327,47 +327,82 @@ void FlowSolver::sweep(int d, double dt, bool last) {
   fill_velocity_ghosts(u_);
 }
 
-void FlowSolver::bound_momentum_fluxes(int d, double dt, bool last, const std::array<int, 3>& face_lo,
-                                       const std::array<int, 3>& face_hi) {
+void FlowSolver::bound_momentum_fluxes(int d, double dt, bool last) {
   // F7's bound: a cell whose new velocity (any component) would leave the range of its own and its
   // two neighbours' along d takes the plain upwind value on both its faces, which makes its update
   // a convex combination of those velocities. Marks only grow, so the rounds end (at worst with
-  // every face upwind); the marks are exchanged so that both ranks of a face choose alike.
+  // every face upwind); the marks are exchanged so that both ranks of a face choose alike. A round
+  // after the first checks only the cells next to the ones just marked (the rest of the fluxes did
+  // not change), so the rounds cost one pass over the cells and short lists.
   const FluidGrid& g = *grid_;
   const double h = g.h(d);
   const std::ptrdiff_t st = g.stride(d);
   const double rg = settings_.gas.density, dr = settings_.liquid.density - rg;
   const auto& uf = uf_[d];
+  auto overshoots = [&](std::size_t c) {
+    const double div = last ? -dilatation_[c] : (uf[c + st] - uf[c]) * dt / h;  // as the update's (F4)
+    const double cc = indicator_[c];
+    const double f_new = f_[c] - (flux_f_[c + st] - flux_f_[c]) + cc * div;
+    const double rho_old = rg + dr * f_[c], rho_new = rg + dr * f_new, rho_cc = rg + dr * cc;
+    for (int q = 0; q < 3; ++q) {
+      const auto& u = u_[q];
+      const double m = rho_old * u[c] - (flux_q_[q][c + st] - flux_q_[q][c]) + rho_cc * work_[q][c] * div;
+      const double lo = std::min({u[c - st], u[c], u[c + st]}), hi = std::max({u[c - st], u[c], u[c + st]});
+      const double slack = kMomentumBoundSlack * (std::abs(lo) + std::abs(hi)) + 1e-14;
+      if (m < (lo - slack) * rho_new || m > (hi + slack) * rho_new) return true;
+    }
+    return false;
+  };
+  auto upwind_face = [&](std::size_t face) {
+    const std::size_t up = uf[face] > 0 ? face - st : face;
+    for (int q = 0; q < 3; ++q) flux_q_[q][face] = flux_m_[face] * u_[q][up];
+  };
   std::fill(upwind_cell_.begin(), upwind_cell_.end(), 0.0);
-  while (true) {
-    double marked = 0;
-    for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)}, [&](int i, int j, int k) {
-      const std::size_t c = g.at(i, j, k);
-      if (upwind_cell_[c] != 0) return;
-      const double div = last ? -dilatation_[c] : (uf[c + st] - uf[c]) * dt / h;  // as the update's (F4)
-      const double cc = indicator_[c];
-      const double f_new = f_[c] - (flux_f_[c + st] - flux_f_[c]) + cc * div;
-      const double rho_old = rg + dr * f_[c], rho_new = rg + dr * f_new, rho_cc = rg + dr * cc;
-      for (int q = 0; q < 3; ++q) {
-        const auto& u = u_[q];
-        const double m = rho_old * u[c] - (flux_q_[q][c + st] - flux_q_[q][c]) + rho_cc * work_[q][c] * div;
-        const double lo = std::min({u[c - st], u[c], u[c + st]}), hi = std::max({u[c - st], u[c], u[c + st]});
-        const double slack = kMomentumBoundSlack * (std::abs(lo) + std::abs(hi)) + 1e-14;
-        if (m < (lo - slack) * rho_new || m > (hi + slack) * rho_new) {
-          upwind_cell_[c] = 1;
-          marked += 1;
-          return;
-        }
-      }
-    });
-    if (g.reduce_sum(marked) == 0) return;
+  auto& marked = bound_marked_;
+  auto& check = bound_check_;
+  marked.clear();
+  for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)}, [&](int i, int j, int k) {
+    if (overshoots(g.at(i, j, k))) marked.push_back({i, j, k});
+  });
+  for (double round = 1;; ++round) {
+    for (const auto& m : marked) upwind_cell_[g.at(m[0], m[1], m[2])] = round;
+    if (g.reduce_sum(static_cast<double>(marked.size())) == 0) return;
     g.exchange(upwind_cell_);
-    for_box(face_lo, face_hi, [&](int i, int j, int k) {
-      const std::size_t c = g.at(i, j, k);
-      if (upwind_cell_[c] == 0 && upwind_cell_[c - st] == 0) return;
-      const std::size_t up = uf[c] > 0 ? c - st : c;
-      for (int q = 0; q < 3; ++q) flux_q_[q][c] = flux_m_[c] * u_[q][up];
-    });
+    // The faces of the cells just marked take the upwind value, and their unmarked owned
+    // neighbours along d are checked again; a cell just marked on the next rank (a ghost) does the
+    // same to the face it shares with this rank's cell.
+    check.clear();
+    auto recheck = [&](std::array<int, 3> n) {
+      if (n[d] >= g.begin(d) && n[d] < g.end(d) && upwind_cell_[g.at(n[0], n[1], n[2])] == 0) check.push_back(n);
+    };
+    for (const auto& m : marked) {
+      const std::size_t c = g.at(m[0], m[1], m[2]);
+      upwind_face(c);
+      upwind_face(c + st);
+      std::array<int, 3> n = m;
+      n[d] = m[d] - 1, recheck(n);
+      n[d] = m[d] + 1, recheck(n);
+    }
+    std::array<int, 3> lo{g.begin(0), g.begin(1), g.begin(2)}, hi{g.end(0), g.end(1), g.end(2)};
+    for (const int ghost : {g.begin(d) - 1, g.end(d)}) {
+      lo[d] = ghost, hi[d] = ghost + 1;
+      for_box(lo, hi, [&](int i, int j, int k) {
+        const std::size_t c = g.at(i, j, k);
+        if (upwind_cell_[c] != round) return;
+        upwind_face(ghost < g.begin(d) ? c + st : c);
+        std::array<int, 3> n{i, j, k};
+        n[d] = ghost < g.begin(d) ? ghost + 1 : ghost - 1;
+        recheck(n);
+      });
+    }
+    marked.clear();
+    for (const auto& n : check) {
+      const std::size_t c = g.at(n[0], n[1], n[2]);
+      if (upwind_cell_[c] == 0 && overshoots(c)) {
+        upwind_cell_[c] = round + 1;  // not checked twice if listed twice
+        marked.push_back(n);
+      }
+    }
   }
 }
 

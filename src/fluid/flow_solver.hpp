@@ -194,8 +194,7 @@ class FlowSolver {
   void fill_pressure_ghosts();
   void sweep(int d, double dt, bool last);  // one direction of VOF + momentum advection
   // The faces of cells whose new velocity would overshoot take the upwind value (F7).
-  void bound_momentum_fluxes(int d, double dt, bool last, const std::array<int, 3>& face_lo,
-                             const std::array<int, 3>& face_hi);
+  void bound_momentum_fluxes(int d, double dt, bool last);
   void reconstruct(int d);                  // PLIC in owned cells and one layer beyond along d
   void youngs_normal(std::size_t c, double n[3]) const;
   void interface_potential();               // interface_phi_ (F10b)
@@ -209,7 +208,8 @@ class FlowSolver {
   std::unique_ptr<FluidGrid> grid_;
   std::unique_ptr<PressurePoisson> poisson_;
   std::vector<double> f_, p_, rho_, mu_, indicator_, dilatation_;
-  std::vector<double> upwind_cell_;  // F7's bound: 1 where a cell's faces carry the upwind velocity
+  std::vector<double> upwind_cell_;  // F7's bound: the round in which a cell's faces took the upwind velocity
+  std::vector<std::array<int, 3>> bound_marked_, bound_check_;  // its lists of cells
   std::array<std::vector<double>, 3> u_, uf_, face_accel_;
   std::array<std::vector<double>, 3> work_;  // the viscous stage's new velocities (swapped into u_)
   std::array<std::vector<double>, 3> stress_div_;  // div(tau) of the last viscous stage, when kept
