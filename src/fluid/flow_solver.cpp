@@ -310,21 +310,28 @@ void FlowSolver::sweep(int d, double dt, bool last) {
       div = -dilatation_[c];
     else
       dilatation_[c] += div;
-    const double cc = indicator_[c];
-    const double f_old = f_[c];
-    const double f_new = f_old - (flux_f_[c + st] - flux_f_[c]) + cc * div;  // (F4)
-    const double rho_old = rg + dr * f_old, rho_new = rg + dr * f_new, rho_cc = rg + dr * cc;
-    for (int q = 0; q < 3; ++q) {
-      // The dilatation term with the velocity at the step's start (work_): the sweeps' terms then
-      // cancel as their div's do, and the advection moves momentum without making any (F7).
-      const double m = rho_old * u_[q][c] - (flux_q_[q][c + st] - flux_q_[q][c]) + rho_cc * work_[q][c] * div;
-      u_[q][c] = m / rho_new;  // (F7)
-    }
-    f_[c] = f_new;
+    const SweepUpdate up = sweep_update(c, st, div);
+    for (int q = 0; q < 3; ++q) u_[q][c] = up.momentum[q] / up.density;  // (F7)
+    f_[c] = up.fraction;
   });
   g.exchange({&f_, &u_[0], &u_[1], &u_[2]});
   fill_fraction_ghosts(f_);
   fill_velocity_ghosts(u_);
+}
+
+FlowSolver::SweepUpdate FlowSolver::sweep_update(std::size_t c, std::ptrdiff_t st, double div) const {
+  const double rg = settings_.gas.density, dr = settings_.liquid.density - rg;
+  const double cc = indicator_[c];
+  const double f_old = f_[c];
+  SweepUpdate up;
+  up.fraction = f_old - (flux_f_[c + st] - flux_f_[c]) + cc * div;  // (F4)
+  up.density = rg + dr * up.fraction;
+  const double rho_old = rg + dr * f_old, rho_cc = rg + dr * cc;
+  for (int q = 0; q < 3; ++q)
+    // The dilatation term with the velocity at the step's start (work_): the sweeps' terms then
+    // cancel as their div's do, and the advection moves momentum without making any (F7).
+    up.momentum[q] = rho_old * u_[q][c] - (flux_q_[q][c + st] - flux_q_[q][c]) + rho_cc * work_[q][c] * div;
+  return up;
 }
 
 void FlowSolver::bound_momentum_fluxes(int d, double dt, bool last) {
@@ -337,19 +344,15 @@ void FlowSolver::bound_momentum_fluxes(int d, double dt, bool last) {
   const FluidGrid& g = *grid_;
   const double h = g.h(d);
   const std::ptrdiff_t st = g.stride(d);
-  const double rg = settings_.gas.density, dr = settings_.liquid.density - rg;
   const auto& uf = uf_[d];
   auto overshoots = [&](std::size_t c) {
     const double div = last ? -dilatation_[c] : (uf[c + st] - uf[c]) * dt / h;  // as the update's (F4)
-    const double cc = indicator_[c];
-    const double f_new = f_[c] - (flux_f_[c + st] - flux_f_[c]) + cc * div;
-    const double rho_old = rg + dr * f_[c], rho_new = rg + dr * f_new, rho_cc = rg + dr * cc;
+    const SweepUpdate up = sweep_update(c, st, div);
     for (int q = 0; q < 3; ++q) {
       const auto& u = u_[q];
-      const double m = rho_old * u[c] - (flux_q_[q][c + st] - flux_q_[q][c]) + rho_cc * work_[q][c] * div;
       const double lo = std::min({u[c - st], u[c], u[c + st]}), hi = std::max({u[c - st], u[c], u[c + st]});
       const double slack = kMomentumBoundSlack * (std::abs(lo) + std::abs(hi)) + 1e-14;
-      if (m < (lo - slack) * rho_new || m > (hi + slack) * rho_new) return true;
+      if (up.momentum[q] < (lo - slack) * up.density || up.momentum[q] > (hi + slack) * up.density) return true;
     }
     return false;
   };

@@ -195,6 +195,12 @@ class FlowSolver {
   void sweep(int d, double dt, bool last);  // one direction of VOF + momentum advection
   // The faces of cells whose new velocity would overshoot take the upwind value (F7).
   void bound_momentum_fluxes(int d, double dt, bool last);
+  // A cell's new liquid fraction, density and momentum (per cell volume) from a sweep's face fluxes
+  // along the stride st and its dilatation term div (F4, F6, F7).
+  struct SweepUpdate {
+    double fraction, density, momentum[3];
+  };
+  SweepUpdate sweep_update(std::size_t c, std::ptrdiff_t st, double div) const;
   void reconstruct(int d);                  // PLIC in owned cells and one layer beyond along d
   void youngs_normal(std::size_t c, double n[3]) const;
   void interface_potential();               // interface_phi_ (F10b)
