@@ -46,16 +46,11 @@ DemScene::DemScene(const ConfigNode& root, MPI_Comm comm, const std::string& cas
   check_interval_ = run.real("check_interval", Dim::time, Range::positive(), 1e-3);
   max_overlap_ratio_ = run.real("max_overlap_ratio", Dim::none, Range{0.0, 2.0, true, false}, max_overlap_ratio_);
   poll_every_ = 100;
-  if (const auto b = root.optional_section("balance")) {
-    balance_.enabled = b->flag("enabled", false);
-    balance_.interval = b->integer("interval", 1, 1L << 40, balance_.interval);
-    balance_.threshold = b->real("threshold", Dim::none, Range::closed(1.0, 1e9), balance_.threshold);
-    balance_.measure_time = b->choice("measure", {"counts", "time"}, "counts") == "time";
-  }
+  balance_.read(root);
 }
 
 void DemScene::balance_if_due() {
-  if (!balance_.enabled || decomp_->size() == 1 || dem_->steps() % balance_.interval != 0) return;
+  if (!balance_.due(dem_->steps(), decomp_->size())) return;
   MPI_Comm comm = decomp_->comm();
   auto local_work = [](const std::vector<WorkSample>& w) {
     double sum = 0;
@@ -68,13 +63,11 @@ void DemScene::balance_if_due() {
     double busy = 0;
     for (const char* phase : {"integrate", "neighbor", "migration", "ghost_comm", "contact_forces", "wall_forces"})
       busy += dem_->timers().total(phase);
-    const double since = busy - balance_.busy_at_check, counts = local_work(work);
-    balance_.busy_at_check = busy;
+    const double since = balance_.busy_since(busy), counts = local_work(work);
     for (auto& w : work) w.weight *= counts > 0 ? since / counts : 0.0;
   }
   const double before = imbalance(comm, local_work(work));
-  if (balance_.checks++ == 0) balance_.first_imbalance = before;
-  if (before <= balance_.threshold) return;
+  if (!balance_.over_threshold(before)) return;
   // Slabs stay wider than the contact reach (DemSolver's check is strict), by a bin of the search.
   const Vec3 lo = decomp_->global_lo(), hi = decomp_->global_hi();
   Vec3 min_width;
@@ -87,14 +80,9 @@ void DemScene::balance_if_due() {
   decomp_->set_cuts(cuts);
   dem_->rebalance();
   // Counts: the new cuts' imbalance now; time: known at the next check (its `before`).
-  const double after = balance_.measure_time ? before : imbalance(comm, local_work(dem_->work()));
-  ++balance_.rebalances;
-  balance_.last_before = before, balance_.last_after = after;
-  if (balance_.events.size() < 100) {
-    nlohmann::json e{{"step", dem_->steps()}, {"before", before}};
-    if (!balance_.measure_time) e["after"] = after;
-    balance_.events.push_back(e);
-  }
+  std::optional<double> after;
+  if (!balance_.measure_time) after = imbalance(comm, local_work(dem_->work()));
+  balance_.rebalanced(dem_->steps(), before, after);
 }
 
 std::string DemScene::resolve_path(const std::string& p) const {
@@ -237,13 +225,7 @@ void DemScene::summarise(nlohmann::json& s) {
       per_rank["halo_bytes_sent"].push_back(static_cast<long>(all[3 * r + 2]));
     }
     s["per_rank"] = per_rank;
-    if (balance_.enabled)
-      s["balance"] = {{"measure", balance_.measure_time ? "time" : "counts"},
-                      {"interval", balance_.interval},         {"threshold", balance_.threshold},
-                      {"checks", balance_.checks},             {"rebalances", balance_.rebalances},
-                      {"first_imbalance", balance_.first_imbalance}, {"last_before", balance_.last_before},
-                      {"events", balance_.events}};
-    if (balance_.enabled && !balance_.measure_time) s["balance"]["last_after"] = balance_.last_after;
+    if (balance_.enabled) s["balance"] = balance_.summary();
   }
   s["quantities"] = q;
   // Mesh walls: the load the bodies put on each at the last step, and a pivot's angle and speed.

@@ -14,6 +14,7 @@
 #include <optional>
 #include <string>
 
+#include "app/balance_record.hpp"
 #include "app/run_loop.hpp"
 #include "app/scene.hpp"
 #include "core/config.hpp"
@@ -77,23 +78,12 @@ class DemScene : public SteppedScene {
   void summarise(nlohmann::json& s) override;
   PhaseTimers& phase_timers() override { return dem_->timers(); }
 
-  // Load balance (issue 19, case section `balance`): every `interval` steps the ranks' work
-  // (DemSolver::work, or measured time) is compared; above `threshold` (largest over mean) the cut planes move to
-  // balance it (core/balance.hpp) and the bodies follow (DemSolver::rebalance).
-  struct Balance {
-    bool enabled = false;
-    long interval = 1000;
-    double threshold = 1.1;
-    // counts: DemSolver::work (the same cuts on every run); time: each rank's busy seconds since
-    // the last check, shared over its bodies in proportion to their counts (what the counts miss:
-    // the club's mesh contacts, struck grains' rebuilds; the cuts vary from run to run, the
-    // results do not).
-    bool measure_time = false;
-    double busy_at_check = 0;
-    long checks = 0, rebalances = 0;
-    double first_imbalance = 0, last_before = 0, last_after = 0;
-    nlohmann::json events = nlohmann::json::array();  // the first 100 rebalances: step, before, after
-  } balance_;
+  // Load balance (issue 19, case section `balance`, app/balance_record.hpp): every `interval` steps
+  // the ranks' work (DemSolver::work, or measured time) is compared; above `threshold` the cut planes
+  // move to balance it (core/balance.hpp) and the bodies follow (DemSolver::rebalance). The time
+  // measure shares a rank's busy seconds over its bodies by their counts (what the counts miss: the
+  // club's mesh contacts, struck grains' rebuilds; the cuts vary from run to run, the results do not).
+  BalanceRecord balance_;
   void balance_if_due();
 
   std::unique_ptr<SnapshotSeries> snapshots_;

@@ -246,6 +246,31 @@ void SceneBodies::write_checkpoint(const std::string& flow_checkpoint) const {
   tessera::write_checkpoint(bodies_path(flow_checkpoint), *dem_, extras());
 }
 
+void SceneBodies::repartition(const std::string& flow_state) {
+  dem_->rebalance();
+  auto fresh = std::make_unique<CoupledSolver>(flow_, *dem_, coupling_);
+  fresh->take_over(*coupled_);
+  coupled_ = std::move(fresh);
+  if (coupling_.liquid_in_pores)
+    read_checkpoint_cell_field(flow_state, flow_.grid(), "liquid_content", coupled_->mutable_liquid().mutable_content(),
+                               "the liquid in the cells' fluid part");
+  coupled_->start(false);
+}
+
+std::vector<WorkSample> SceneBodies::work() const {
+  std::vector<WorkSample> w = dem_->work();
+  const double per_step = std::max(1, last_substeps_);
+  for (auto& s : w) s.weight *= per_step;
+  return w;
+}
+
+double SceneBodies::busy_seconds() {
+  double busy = 0;
+  for (const char* stage : {"dem_substeps", "solid_fraction", "fluid_force", "pore_liquid", "correction"})
+    busy += coupled_->timers().total(stage);
+  return busy;
+}
+
 std::vector<NamedCellField> SceneBodies::checkpoint_fields() const {
   if (!coupled_ || !coupled_->liquid_in_pores()) return {};
   return {{"liquid_content", &coupled_->liquid().content()}};

@@ -53,6 +53,19 @@ class SceneBodies {
   bool check(const std::function<void(const std::string&)>& fail);
   void snapshot(const FieldSeries& fields, bool resuming);
   void write_checkpoint(const std::string& flow_checkpoint) const;
+  // Collective, after the cut planes moved and the flow was repartitioned and its state read back
+  // from `flow_state` (a flow checkpoint with checkpoint_fields()): the bodies move to their new
+  // ranks (DemSolver::rebalance), the coupled solver is made again on the new grid as at a restart
+  // (the liquid content from `flow_state`), taking over this run's record. Then add_fields again.
+  void repartition(const std::string& flow_state);
+  // The bodies' part of a rank's work for balancing (issue 19): DemSolver::work scaled by the last
+  // flow step's sub-steps (the DEM's work per flow step).
+  std::vector<WorkSample> work() const;
+  // The busy seconds of the bodies' stages so far (DEM sub-steps, solid fraction, fluid force, pore
+  // liquid, correction), this rank.
+  double busy_seconds();
+  double contact_reach() const { return dem_->contact_reach(); }
+  bool bodies_fixed() const { return coupling_.fixed_bodies; }
   // The flow checkpoint's extra cell fields (the liquid in the cells' fluid part, C7).
   std::vector<NamedCellField> checkpoint_fields() const;
   std::string series_header() const;

@@ -10,6 +10,9 @@
 // every snapshot and at the end; with bodies.settled_kinetic_energy the run ends once the bodies are
 // at rest.
 //
+// With a `balance` section the cut planes move with the ranks' work (issue 19; docs/design.md, "Load
+// balance in a flow or coupled run"): the grid, its fields and the bodies follow.
+//
 // Writes DIR/summary.json (quantities, timers, Poisson statistics, dt limits), DIR/series.csv
 // (one row per series_interval: time, dt and its limit, Poisson iterations and residual, liquid
 // volume, kinetic energy, maximum speed, front position), DIR/fields/fields.xmf (ParaView) and
@@ -22,8 +25,10 @@
 #include <fstream>
 #include <map>
 
+#include "app/balance_record.hpp"
 #include "app/run_loop.hpp"
 #include "app/scenes.hpp"
+#include "core/balance.hpp"
 #include "core/errors.hpp"
 
 #if defined(TESSERA_HAVE_PETSC)
@@ -133,6 +138,14 @@ class FlowScene final : public SteppedScene {
         if (front_along_ == front_up_) front->fail("up", "an axis other than `along`");
       }
     read_loop_keys(root, true);
+    balance_.read(root);
+    if (balance_.enabled) {
+      const ConfigNode b = root.section("balance");
+      cell_weight_ = b.real("cell_weight", Dim::none, Range::positive(), cell_weight_);
+      if (bodies_ && bodies_->bodies_fixed())
+        b.fail("enabled", "false with coupling.bodies: fixed (held bodies' loads are summed per rank between "
+                          "snapshots; their work does not move: set domain.cuts instead)");
+    }
     poll_every_ = 10;
     max_speed_ = root.section("run").real("max_speed", Dim::velocity, Range::positive(), 1e3);
     if (const auto out = root.optional_section("output")) {
@@ -153,6 +166,15 @@ class FlowScene final : public SteppedScene {
   void set_initial_state();
   double front_position() const;
   [[noreturn]] void fail(const RunOptions& opt, const std::string& why);
+  // Load balance (issue 19, case section `balance`, app/balance_record.hpp).
+  double rank_work(double cells_weight, const std::vector<WorkSample>& bodies) const;
+  void balance_if_due(const RunOptions& opt);
+  void repartition(const CutPlanes& cuts, const RunOptions& opt);
+  bool same_grid_of_slabs(const CutPlanes& cuts) const {  // as many cuts per direction as this run has
+    for (int d = 0; d < 3; ++d)
+      if (int(cuts[d].size()) != decomp_->dims()[d] - 1) return false;
+    return true;
+  }
 
   // The run loop's hooks (app/run_loop.hpp).
   const Decomposition& decomposition() const override { return *decomp_; }
@@ -165,7 +187,8 @@ class FlowScene final : public SteppedScene {
   bool after_step(const RunOptions& opt) override;
   void write_snapshot() override;
   void write_checkpoint(const std::string& path) override {
-    write_flow_checkpoint(path, *flow_, bodies_ ? bodies_->checkpoint_fields() : std::vector<NamedCellField>{});
+    const Decomposition::Cuts cuts = decomp_->interior_cuts();
+    write_flow_checkpoint(path, *flow_, bodies_ ? bodies_->checkpoint_fields() : std::vector<NamedCellField>{}, &cuts);
     if (bodies_) bodies_->write_checkpoint(path);
   }
   std::string progress() override;
@@ -193,6 +216,11 @@ class FlowScene final : public SteppedScene {
   std::optional<Vec3> drop_centre_;  // the drop placed over the bed by this run
   double liquid_volume() const { return bodies_ ? bodies_->liquid_volume() : flow_->liquid_volume(); }
   bool resuming_ = false;  // the first snapshot of a restarted run
+  // The work of a rank: its flow cells, each `cell_weight_` (counts) or the flow's busy seconds
+  // (time), and with bodies SceneBodies::work. Counts: a flow cell against a DEM contact-list entry
+  // of one sub-step.
+  BalanceRecord balance_;
+  double cell_weight_ = 1;
 };
 
 void FlowScene::set_initial_state() {
@@ -267,7 +295,16 @@ void FlowScene::fail(const RunOptions& opt, const std::string& why) {
 }
 
 void FlowScene::start(const RunOptions& opt) {
-  if (opt.restart) read_flow_checkpoint(*opt.restart, *flow_);
+  if (opt.restart) {
+    // A balanced run resumes on the cuts it had moved to (the same bits as going on).
+    if (balance_.enabled)
+      if (const auto cuts = read_checkpoint_cuts(*opt.restart, decomp_->comm()))
+        if (same_grid_of_slabs(*cuts) && *cuts != decomp_->interior_cuts()) {
+          decomp_->set_cuts(*cuts);
+          flow_->repartition(*decomp_);
+        }
+    read_flow_checkpoint(*opt.restart, *flow_);
+  }
   if (!bodies_) return;
   if (const auto d = bodies_->start(opt.restart)) {
     LiquidShape s;
@@ -351,6 +388,84 @@ void FlowScene::step(const RunOptions& opt) {
   ++limits_[limit];
   poisson_iterations_ += last_.poisson.iterations;
   max_iterations_ = std::max<long>(max_iterations_, last_.poisson.iterations);
+  balance_if_due(opt);
+}
+
+double FlowScene::rank_work(double cells_weight, const std::vector<WorkSample>& bodies) const {
+  double w = cells_weight;
+  for (const auto& s : bodies) w += s.weight;
+  return w;
+}
+
+// Every balance.interval steps: the ranks' work (their flow cells and bodies); above the threshold
+// the cut planes move to the weighted quantiles of its marginals along each direction, on cell
+// faces, each slab at least two cells (the halo) and the DEM's contact reach wide.
+void FlowScene::balance_if_due(const RunOptions& opt) {
+  if (!balance_.due(flow_->steps(), decomp_->size())) return;
+  MPI_Comm comm = decomp_->comm();
+  auto owned_box = [&] {
+    const FluidGrid& g = flow_->grid();
+    WorkBox box;
+    long cells = 1;
+    for (int d = 0; d < 3; ++d) {
+      box.lo[d] = g.lo()[d] + g.begin(d) * g.h(d);
+      box.hi[d] = g.lo()[d] + g.end(d) * g.h(d);
+      cells *= g.end(d) - g.begin(d);
+    }
+    box.weight = double(cells) * cell_weight_;
+    return box;
+  };
+  WorkBox cells = owned_box();
+  std::vector<WorkSample> bodies = bodies_ ? bodies_->work() : std::vector<WorkSample>{};
+  if (balance_.measure_time) {
+    // Busy seconds since the last check, the ghost exchanges' waits left out: the flow's over the
+    // cells, the bodies' stages over the bodies by their counts.
+    PhaseTimers& t = flow_->timers();
+    double flow = -t.total("halo_exchange_fields") - t.total("halo_exchange_multigrid");
+    for (const char* phase : {"advection", "poisson", "projection", "viscous"}) flow += t.total(phase);
+    cells.weight = balance_.busy_since(flow, 0);
+    if (bodies_) {
+      const double since = balance_.busy_since(bodies_->busy_seconds(), 1), counts = rank_work(0, bodies);
+      for (auto& s : bodies) s.weight *= counts > 0 ? since / counts : 0.0;
+    }
+  }
+  const double before = imbalance(comm, rank_work(cells.weight, bodies));
+  if (!balance_.over_threshold(before)) return;
+  const FluidGrid& g = flow_->grid();
+  const Vec3 lo = decomp_->global_lo(), hi = decomp_->global_hi();
+  Vec3 min_width, spacing;
+  for (int d = 0; d < 3; ++d) {
+    spacing[d] = g.h(d);
+    min_width[d] = FluidGrid::kGhost * g.h(d);
+    if (bodies_) min_width[d] = std::max(min_width[d], bodies_->contact_reach() + g.h(d));
+    if (decomp_->dims()[d] * min_width[d] >= hi[d] - lo[d]) return;  // no room to move the cuts
+  }
+  CutPlanes cuts = balanced_cuts(comm, bodies, lo, hi, decomp_->dims(), min_width, spacing, 4096, {cells});
+  for (auto& c : cuts) MPI_Bcast(c.data(), static_cast<int>(c.size()), MPI_DOUBLE, 0, comm);  // one rounding
+  if (cuts == decomp_->interior_cuts()) return;  // already where the work puts them (to a cell)
+  repartition(cuts, opt);
+  std::optional<double> after;
+  if (!balance_.measure_time)
+    after = imbalance(comm, rank_work(owned_box().weight, bodies_ ? bodies_->work() : std::vector<WorkSample>{}));
+  balance_.rebalanced(flow_->steps(), before, after);
+}
+
+// The state moves to the new cuts through a flow checkpoint (the restart's path, bit for bit: the
+// fields by global index, parallel HDF5): written on the old grid, read on the new one; the bodies
+// move in memory (DemSolver::rebalance) and the coupling is made again on the new grid as at a
+// restart. The file, DIR/repartition.h5, is removed after.
+void FlowScene::repartition(const CutPlanes& cuts, const RunOptions& opt) {
+  const std::string path = opt.output_dir + "/repartition.h5";
+  write_flow_checkpoint(path, *flow_, bodies_ ? bodies_->checkpoint_fields() : std::vector<NamedCellField>{});
+  decomp_->set_cuts(cuts);
+  flow_->repartition(*decomp_);
+  read_flow_checkpoint(path, *flow_);
+  if (bodies_) {
+    bodies_->repartition(path);
+    bodies_->add_fields(*fields_);
+  }
+  MPI_Barrier(decomp_->comm());
+  if (decomp_->rank() == 0) fs::remove(path);
 }
 
 bool FlowScene::after_step(const RunOptions& opt) {
@@ -420,6 +535,28 @@ void FlowScene::summarise(nlohmann::json& s) {
   s["cell_steps_per_second_per_core"] =
       double(cells) * steps_run / std::max(s["loop_seconds"].get<double>(), 1e-9) / decomp_->size();
   s["quantities"] = q;
+  // The ranks' work by counts (flow cells times balance.cell_weight, the bodies' DemSolver::work per
+  // flow step) and the balance's record.
+  {
+    long owned = 1;
+    for (int d = 0; d < 3; ++d) owned *= g.end(d) - g.begin(d);
+    const double local = rank_work(double(owned) * cell_weight_, bodies_ ? bodies_->work() : std::vector<WorkSample>{});
+    s["imbalance"] = imbalance(decomp_->comm(), local);
+    const int size = decomp_->size();
+    const double mine[2] = {double(owned), local};
+    std::vector<double> all(2 * std::size_t(size));
+    MPI_Allgather(mine, 2, MPI_DOUBLE, all.data(), 2, MPI_DOUBLE, decomp_->comm());
+    nlohmann::json per_rank{{"cells", nlohmann::json::array()}, {"work", nlohmann::json::array()}};
+    for (int r = 0; r < size; ++r) {
+      per_rank["cells"].push_back(long(all[2 * r]));
+      per_rank["work"].push_back(all[2 * r + 1]);
+    }
+    s["per_rank"] = per_rank;
+    if (balance_.enabled) {
+      s["balance"] = balance_.summary();
+      s["balance"]["cell_weight"] = cell_weight_;
+    }
+  }
   s["output"] = {{"checkpoint", "checkpoint.h5"},
                  {"series", "series.csv"},
                  {"snapshots", fields_->count() ? "fields/fields.xmf" : ""}};

@@ -96,7 +96,8 @@ double imbalance(const std::vector<double>& per_rank) {
 }
 
 CutPlanes balanced_cuts(MPI_Comm comm, const std::vector<WorkSample>& local, const Vec3& lo, const Vec3& hi,
-                        std::array<int, 3> dims, const Vec3& min_width, const Vec3& spacing, int bins) {
+                        std::array<int, 3> dims, const Vec3& min_width, const Vec3& spacing, int bins,
+                        const std::vector<WorkBox>& boxes) {
   CutPlanes cuts;
   std::vector<double> hist(static_cast<std::size_t>(bins)), x(hist.size());
   for (int d = 0; d < 3; ++d) {
@@ -106,6 +107,18 @@ CutPlanes balanced_cuts(MPI_Comm comm, const std::vector<WorkSample>& local, con
     for (const auto& s : local) {
       const int b = std::clamp(static_cast<int>((s.x[d] - lo[d]) / width), 0, bins - 1);
       hist[static_cast<std::size_t>(b)] += s.weight;
+    }
+    for (const auto& box : boxes) {
+      const double a = std::clamp(box.lo[d], lo[d], hi[d]), z = std::clamp(box.hi[d], lo[d], hi[d]);
+      if (!(z > a)) continue;
+      const double per_length = box.weight / (z - a);
+      const int first = std::clamp(static_cast<int>((a - lo[d]) / width), 0, bins - 1);
+      const int last = std::clamp(static_cast<int>((z - lo[d]) / width), 0, bins - 1);
+      for (int b = first; b <= last; ++b) {
+        const double b_lo = lo[d] + b * width, b_hi = b_lo + width;
+        const double covered = std::min(z, b_hi) - std::max(a, b_lo);
+        if (covered > 0) hist[static_cast<std::size_t>(b)] += per_length * covered;
+      }
     }
     MPI_Allreduce(MPI_IN_PLACE, hist.data(), bins, MPI_DOUBLE, MPI_SUM, comm);
     for (int b = 0; b < bins; ++b) x[static_cast<std::size_t>(b)] = lo[d] + (b + 0.5) * width;

@@ -43,12 +43,19 @@ std::vector<double> rank_work(const std::vector<WorkSample>& work, std::array<in
 // Largest over mean (1 = balanced).
 double imbalance(const std::vector<double>& per_rank);
 
-// Collective (every rank its own samples): the cuts from per-direction histograms of `bins` bins
-// over the box, summed over the ranks. With whole-number weights the sums are exact, so every rank
-// (and every rank count) gets the same cuts; a cut's resolution is a bin.
+// Work spread evenly over a box (a rank's flow cells: one box, not a sample per cell).
+struct WorkBox {
+  Vec3 lo, hi;
+  double weight = 0;
+};
+
+// Collective (every rank its own samples and boxes): the cuts from per-direction histograms of
+// `bins` bins over the box, summed over the ranks. With whole-number weights the sums are exact, so
+// every rank (and every rank count) gets the same cuts; a cut's resolution is a bin. A box adds its
+// weight to the bins it covers in proportion to the length covered.
 CutPlanes balanced_cuts(MPI_Comm comm, const std::vector<WorkSample>& local, const Vec3& lo, const Vec3& hi,
                         std::array<int, 3> dims, const Vec3& min_width = {}, const Vec3& spacing = {},
-                        int bins = 4096);
+                        int bins = 4096, const std::vector<WorkBox>& boxes = {});
 // Collective: the largest rank's work over the mean.
 double imbalance(MPI_Comm comm, double local_work);
 

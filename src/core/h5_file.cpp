@@ -163,6 +163,7 @@ std::vector<double> H5File::read_block(const std::string& name, const std::size_
 }
 
 bool H5File::has(const std::string& name) const { return H5Lexists(file_, name.c_str(), H5P_DEFAULT) > 0; }
+bool H5File::has_attribute(const std::string& name) const { return H5Aexists(file_, name.c_str()) > 0; }
 
 void H5File::set_attribute(const std::string& name, double value) {
   const hid_t space = H5Screate(H5S_SCALAR);

@@ -29,6 +29,7 @@ class H5File {
   template <class T>
   std::vector<T> read_all(const std::string& name, int& cols) const;
   bool has(const std::string& name) const;
+  bool has_attribute(const std::string& name) const;
   // Collective. A block of a global array of shape (global[0], global[1], global[2], comps) in C
   // order (slowest first): this rank writes count[] rows from offset[] of its packed buffer
   // (count[0] * count[1] * count[2] * comps values). Fluid fields use (z, y, x, comps).

@@ -55,6 +55,12 @@ void CoupledSolver::start(bool fresh) {
   solid_.correct_velocity(flow_, dem_, 0.0);
 }
 
+void CoupledSolver::take_over(const CoupledSolver& old) {
+  timers_ = old.timers_;
+  budget_ = old.budget_;
+  solid_.count_layouts(old.solid_.layouts_computed());
+}
+
 int CoupledSolver::substeps_for(double dt) const {
   if (settings_.substeps) return *settings_.substeps;
   // The least L with dt / L <= the DEM's stable step (C5); a relative 1e-12 slack so that a flow

@@ -70,6 +70,10 @@ class CoupledSolver {
   // the liquid in the cells' fluid part (C7); a restart's velocities were corrected before they were
   // saved, and its liquid content is read (mutable_liquid) before or after this call.
   void start(bool fresh = true);
+  // After the cut planes moved (issue 19): this solver, made on the repartitioned grid with the
+  // rebalanced bodies, takes over the run's record from the one it replaces (timers, momentum
+  // budget, lay-out count). Then start(false), as a restart.
+  void take_over(const CoupledSolver& old);
   CoupledStepStats step(double dt);
   // L for a flow step dt.
   int substeps_for(double dt) const;

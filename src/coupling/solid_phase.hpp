@@ -104,6 +104,7 @@ class SolidPhase {
   using Pose = std::array<double, 7>;  // x, y, z, qw, qx, qy, qz
   Pose layout_pose(const Vec3& x, const Quaternion& q, int shape) const;
   long layouts_computed() const { return layouts_; }  // this rank, whole run
+  void count_layouts(long earlier) { layouts_ += earlier; }  // those of a solid phase this one replaced
   SolidPhaseStats stats() const;  // collective
 
  private:

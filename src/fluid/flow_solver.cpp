@@ -33,6 +33,24 @@ inline double van_leer(double a, double b) { return a * b > 0 ? 2 * a * b / (a +
 FlowSolver::FlowSolver(const Decomposition& decomp, const FlowSettings& settings) : settings_(settings) {
   grid_ = std::make_unique<FluidGrid>(decomp, settings.cells, settings.boundaries);
   poisson_ = std::make_unique<PressurePoisson>(*grid_, settings.poisson);
+  make_fields();
+}
+
+void FlowSolver::repartition(const Decomposition& decomp) {
+  timers();  // the old grid's and multigrid's exchange seconds into the timers
+  poisson_.reset();
+  grid_->repartition(decomp);
+  fields_reported_ = grid_->exchange_seconds(), multigrid_reported_ = 0;
+  poisson_ = std::make_unique<PressurePoisson>(*grid_, settings_.poisson);
+  make_fields();
+  keep_advection_change(!advection_change_[0].empty());
+  keep_stress_divergence(!stress_div_[0].empty());
+  interface_phi_.clear();
+  drag_density_.clear();
+  drag_ = nullptr;
+}
+
+void FlowSolver::make_fields() {
   const FluidGrid& g = *grid_;
   f_ = g.make_field();
   p_ = g.make_field();

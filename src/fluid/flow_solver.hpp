@@ -97,6 +97,11 @@ class FlowSolver {
   ~FlowSolver();
 
   const FluidGrid& grid() const { return *grid_; }
+  // Collective: the grid takes the decomposition's current cut planes (issue 19's rebalancing) and
+  // every field is made anew, zero: the caller puts the state back (read_flow_checkpoint, which
+  // refreshes ghosts and properties). The clock, timers and settings stay; a cell drag must be set
+  // again. References to grid() stay valid (the same object).
+  void repartition(const Decomposition& decomp);
   const FlowSettings& settings() const { return settings_; }
 
   // Initial state: per owned cell, its liquid fraction and its (mass-averaged) velocity. Then the
@@ -188,6 +193,7 @@ class FlowSolver {
   std::string poisson_description() const { return poisson_->description(); }
 
  private:
+  void make_fields();        // every grid field, zero
   void update_properties();  // rho, mu from f on the whole ghosted box
   void fill_fraction_ghosts(std::vector<double>& f) const;
   void fill_velocity_ghosts(std::array<std::vector<double>, 3>& u) const;

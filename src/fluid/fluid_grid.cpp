@@ -43,6 +43,15 @@ const char* boundary_name(BoundaryKind k) {
 FluidGrid::FluidGrid(const Decomposition& decomp, std::array<int, 3> cells,
                      const std::array<std::array<BoundaryKind, 2>, 3>& boundaries)
     : n_(cells), bc_(boundaries) {
+  build(decomp);
+}
+
+void FluidGrid::repartition(const Decomposition& decomp) {
+  release();
+  build(decomp);
+}
+
+void FluidGrid::build(const Decomposition& decomp) {
   const Vec3 lo = decomp.global_lo(), hi = decomp.global_hi();
   lo_ = lo;
   for (int d = 0; d < 3; ++d) h_[d] = (hi[d] - lo[d]) / n_[d];
@@ -100,11 +109,15 @@ FluidGrid::FluidGrid(const Decomposition& decomp, std::array<int, 3> cells,
   halo_ = std::make_unique<CellHalo>(comm_, block, kGhost, CellHalo::Stencil::box);
 }
 
-FluidGrid::~FluidGrid() {
+FluidGrid::~FluidGrid() { release(); }
+
+void FluidGrid::release() {
   halo_.reset();
   if (dap_) DMDestroy(&dap_);
   if (da_) DMDestroy(&da_);
   if (comm_ != MPI_COMM_NULL) MPI_Comm_free(&comm_);
+  dap_ = da_ = nullptr;
+  comm_ = MPI_COMM_NULL;
 }
 
 void FluidGrid::exchange(std::vector<double>& field) const { exchange({&field}); }

@@ -42,6 +42,10 @@ class FluidGrid {
   ~FluidGrid();
   FluidGrid(const FluidGrid&) = delete;
   FluidGrid& operator=(const FluidGrid&) = delete;
+  // Collective: the ownership of the decomposition's current cut planes (issue 19's rebalancing;
+  // the cuts lie on cell faces). The grid stays the same object; its fields' layout changes, so
+  // every field made by make_field must be made again (FlowSolver::repartition).
+  void repartition(const Decomposition& decomp);
 
   MPI_Comm comm() const { return comm_; }
   int rank() const { return rank_; }
@@ -97,6 +101,9 @@ class FluidGrid {
   double exchange_seconds() const { return exchange_seconds_; }
 
  private:
+  void build(const Decomposition& decomp);
+  void release();
+
   MPI_Comm comm_ = MPI_COMM_NULL;
   int rank_ = 0, size_ = 1;
   DM da_ = nullptr, dap_ = nullptr;

@@ -120,7 +120,8 @@ std::string FieldSeries::grid_xml(const FluidGrid& g, int s, const std::string& 
 }
 
 
-void write_flow_checkpoint(const std::string& path, const FlowSolver& flow, const std::vector<NamedCellField>& extra) {
+void write_flow_checkpoint(const std::string& path, const FlowSolver& flow, const std::vector<NamedCellField>& extra,
+                           const Decomposition::Cuts* cuts) {
   const FluidGrid& g = flow.grid();
   const std::string tmp = path + ".tmp";
   {
@@ -129,6 +130,13 @@ void write_flow_checkpoint(const std::string& path, const FlowSolver& flow, cons
     f.set_attribute("time", flow.time());
     f.set_attribute("steps", flow.steps());
     f.set_attribute("last_dt", flow.last_dt());
+    if (cuts)
+      for (int d = 0; d < 3; ++d) {
+        std::ostringstream v;
+        v.precision(17);
+        for (double c : (*cuts)[d]) v << c << ' ';
+        f.set_attribute(std::string("interior_cuts_") + "xyz"[d], (*cuts)[d].empty() ? std::string("-") : v.str());
+      }
     const Block b = block_of(g);
     f.write_block("liquid_fraction", pack(g, b, {&flow.fraction()}).data(), b.global, b.offset, b.count, 1);
     f.write_block("velocity", pack(g, b, {&flow.velocity(0), &flow.velocity(1), &flow.velocity(2)}).data(), b.global,
@@ -164,6 +172,17 @@ void read_flow_checkpoint(const std::string& path, FlowSolver& flow) {
   }
   flow.set_clock(f.attribute_double("time"), f.attribute_long("steps"), f.attribute_double("last_dt"));
   flow.refresh();
+}
+
+std::optional<Decomposition::Cuts> read_checkpoint_cuts(const std::string& path, MPI_Comm comm) {
+  H5File f = H5File::open_read(path, comm);
+  if (!f.has_attribute("interior_cuts_x")) return std::nullopt;
+  Decomposition::Cuts cuts;
+  for (int d = 0; d < 3; ++d) {
+    std::istringstream v(f.attribute_string(std::string("interior_cuts_") + "xyz"[d]));
+    for (double c; v >> c;) cuts[d].push_back(c);
+  }
+  return cuts;
 }
 
 void read_checkpoint_cell_field(const std::string& path, const FluidGrid& g, const std::string& name,

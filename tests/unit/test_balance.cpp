@@ -4,6 +4,7 @@
 // that fills the bottom of a box where equal slabs leave the top ranks idle. The blast's levelled
 // sub-steps: a macro step's time from the per-level work, counted by hand.
 #include <gtest/gtest.h>
+#include <mpi.h>
 
 #include <cmath>
 
@@ -136,3 +137,26 @@ TEST(Balance, TheHaloSendsEachCrossingElementOncePerKindItIsDue) {
 
 }  // namespace
 }  // namespace tessera
+
+// A flow rank's cells enter the cut search as one box of uniform work (the flow and coupled scenes'
+// balance), not a sample per cell. Two boxes along x, [0, 1/4] of work 3 and [1/4, 1] of work 1, on
+// 2 slabs with cuts on the faces of 64 cells: half the work lies left of x = 1/6, so the cut is the
+// face next to it, and it is the cut that a sample per cell centre gives.
+TEST(Balance, ABoxOfCellsWeighsAsItsCells) {
+  const std::vector<WorkBox> boxes = {{{0, 0, 0}, {0.25, 1, 1}, 3.0}, {{0.25, 0, 0}, {1, 1, 1}, 1.0}};
+  const Vec3 lo{0, 0, 0}, hi{1, 1, 1}, spacing{1.0 / 64, 1.0 / 64, 1.0 / 64};
+  const auto from_boxes = balanced_cuts(MPI_COMM_SELF, {}, lo, hi, {2, 1, 1}, {}, spacing, 4096, boxes);
+  std::vector<WorkSample> cells;
+  for (int i = 0; i < 64; ++i) {
+    const double x = (i + 0.5) / 64;
+    cells.push_back({{x, 0.5, 0.5}, x < 0.25 ? 3.0 / 16 : 1.0 / 48});
+  }
+  const auto from_cells = balanced_cuts(MPI_COMM_SELF, cells, lo, hi, {2, 1, 1}, {}, spacing);
+  ASSERT_EQ(from_boxes[0].size(), 1u);
+  std::printf("cut from the boxes %.6f, from the cells %.6f (ideal 1/6 = %.6f)\n", from_boxes[0][0], from_cells[0][0],
+              1.0 / 6);
+  EXPECT_LE(std::abs(from_boxes[0][0] - 1.0 / 6), 1.0 / 64);
+  EXPECT_NEAR(from_boxes[0][0] * 64, std::round(from_boxes[0][0] * 64), 1e-9);
+  EXPECT_EQ(from_boxes[0][0], from_cells[0][0]);
+  EXPECT_TRUE(from_boxes[1].empty() && from_boxes[2].empty());
+}
