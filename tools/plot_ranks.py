@@ -2,7 +2,8 @@
 """Time per rank of one or more runs, side by side (the blast seed's Fig. 15: each rank's time with
 and without rebalancing), from the per-rank timers of their summary.json files: a table on stdout
 and, with --png, stacked bars per rank (computation, cell search and integration, communication,
-and the wait at the rebuild check's reduction).
+and the wait at the rebuild check's reduction; for a coupled run: the flow and coupling stages, the
+DEM, and the communication with its waits).
 
 usage: tools/plot_ranks.py RUN_A/summary.json [RUN_B/summary.json ...] [--labels A,B] [--png FILE]
 """
@@ -13,17 +14,31 @@ GROUPS = [("contact computation", ["contact_forces", "wall_forces"]),
           ("integration and cell search", ["integrate", "neighbor"]),
           ("communication", ["ghost_comm", "migration"]),
           ("waiting (reduction)", ["reduction"])]
+# A coupled run (its timers hold the DEM's under dem/ and the flow's under flow/). The flow's ghost
+# exchanges are timed inside the flow's phases and the coupling's stages alike, waits included: they
+# are taken out of those (a key with a leading "-") and shown with the DEM's communication and waits.
+COUPLED_GROUPS = [("flow and coupling stages (solid fraction, force, pore liquid, correction)",
+                   ["flow/advection", "flow/poisson", "flow/projection", "flow/viscous", "solid_fraction",
+                    "fluid_force", "pore_liquid", "correction", "-flow/halo_exchange_fields",
+                    "-flow/halo_exchange_multigrid"]),
+                  ("DEM (contacts, integration, cell search)",
+                   ["dem/contact_forces", "dem/wall_forces", "dem/integrate", "dem/neighbor"]),
+                  ("communication and waiting (ghost exchanges, migration, reductions)",
+                   ["flow/halo_exchange_fields", "flow/halo_exchange_multigrid", "dem/ghost_comm", "dem/migration",
+                    "dem/reduction"])]
 
 
 def per_rank(summary):
     t = summary["timers"]
     ranks = summary["ranks"]
     out = []
-    for name, keys in GROUPS:
+    for name, keys in (COUPLED_GROUPS if "dem_substeps" in t else GROUPS):
         values = [0.0] * ranks
         for k in keys:
+            sign = -1.0 if k.startswith("-") else 1.0
+            k = k.lstrip("-")
             if k in t and "per_rank" in t[k]:
-                values = [a + b for a, b in zip(values, t[k]["per_rank"])]
+                values = [a + sign * b for a, b in zip(values, t[k]["per_rank"])]
         out.append((name, values))
     return out
 
