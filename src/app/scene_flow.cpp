@@ -167,6 +167,8 @@ class FlowScene final : public SteppedScene {
   double front_position() const;
   [[noreturn]] void fail(const RunOptions& opt, const std::string& why);
   // Load balance (issue 19, case section `balance`, app/balance_record.hpp).
+  WorkBox owned_cells() const;                // this rank's cells, weighing cell_weight_ each
+  std::vector<WorkSample> body_work() const;  // SceneBodies::work, none in the flow scene
   double rank_work(double cells_weight, const std::vector<WorkSample>& bodies) const;
   void balance_if_due(const RunOptions& opt);
   void repartition(const CutPlanes& cuts, const RunOptions& opt);
@@ -391,6 +393,23 @@ void FlowScene::step(const RunOptions& opt) {
   balance_if_due(opt);
 }
 
+WorkBox FlowScene::owned_cells() const {
+  const FluidGrid& g = flow_->grid();
+  WorkBox box;
+  long cells = 1;
+  for (int d = 0; d < 3; ++d) {
+    box.lo[d] = g.lo()[d] + g.begin(d) * g.h(d);
+    box.hi[d] = g.lo()[d] + g.end(d) * g.h(d);
+    cells *= g.end(d) - g.begin(d);
+  }
+  box.weight = double(cells) * cell_weight_;
+  return box;
+}
+
+std::vector<WorkSample> FlowScene::body_work() const {
+  return bodies_ ? bodies_->work() : std::vector<WorkSample>{};
+}
+
 double FlowScene::rank_work(double cells_weight, const std::vector<WorkSample>& bodies) const {
   double w = cells_weight;
   for (const auto& s : bodies) w += s.weight;
@@ -403,20 +422,8 @@ double FlowScene::rank_work(double cells_weight, const std::vector<WorkSample>& 
 void FlowScene::balance_if_due(const RunOptions& opt) {
   if (!balance_.due(flow_->steps(), decomp_->size())) return;
   MPI_Comm comm = decomp_->comm();
-  auto owned_box = [&] {
-    const FluidGrid& g = flow_->grid();
-    WorkBox box;
-    long cells = 1;
-    for (int d = 0; d < 3; ++d) {
-      box.lo[d] = g.lo()[d] + g.begin(d) * g.h(d);
-      box.hi[d] = g.lo()[d] + g.end(d) * g.h(d);
-      cells *= g.end(d) - g.begin(d);
-    }
-    box.weight = double(cells) * cell_weight_;
-    return box;
-  };
-  WorkBox cells = owned_box();
-  std::vector<WorkSample> bodies = bodies_ ? bodies_->work() : std::vector<WorkSample>{};
+  WorkBox cells = owned_cells();
+  std::vector<WorkSample> bodies = body_work();
   if (balance_.measure_time) {
     // Busy seconds since the last check, the ghost exchanges' waits left out: the flow's over the
     // cells, the bodies' stages over the bodies by their counts.
@@ -446,7 +453,7 @@ void FlowScene::balance_if_due(const RunOptions& opt) {
   repartition(cuts, opt);
   std::optional<double> after;
   if (!balance_.measure_time)
-    after = imbalance(comm, rank_work(owned_box().weight, bodies_ ? bodies_->work() : std::vector<WorkSample>{}));
+    after = imbalance(comm, rank_work(owned_cells().weight, body_work()));
   balance_.rebalanced(flow_->steps(), before, after);
 }
 
@@ -538,9 +545,9 @@ void FlowScene::summarise(nlohmann::json& s) {
   // The ranks' work by counts (flow cells times balance.cell_weight, the bodies' DemSolver::work per
   // flow step) and the balance's record.
   {
-    long owned = 1;
-    for (int d = 0; d < 3; ++d) owned *= g.end(d) - g.begin(d);
-    const double local = rank_work(double(owned) * cell_weight_, bodies_ ? bodies_->work() : std::vector<WorkSample>{});
+    const WorkBox box = owned_cells();
+    const double owned = double(std::lround(box.weight / cell_weight_));  // the cell count
+    const double local = rank_work(box.weight, body_work());
     s["imbalance"] = imbalance(decomp_->comm(), local);
     const int size = decomp_->size();
     const double mine[2] = {double(owned), local};
