@@ -69,8 +69,15 @@ void SolidPhase::update(const DemSolver& dem) {
   const FluidGrid& g = grid_;
   const ParticleStore& p = dem.particles();
   const auto& shapes = dem.shapes();
-  const CellRange cells{g.lo(), {g.h(0), g.h(1), g.h(2)}, {g.begin(0), g.begin(1), g.begin(2)},
-                        {g.end(0), g.end(1), g.end(2)}};
+  CellRange cells{g.lo(), {g.h(0), g.h(1), g.h(2)}, {g.begin(0), g.begin(1), g.begin(2)},
+                  {g.end(0), g.end(1), g.end(2)}};
+  // A wall's cells keep what a body pressed into it has beyond it (C1): the body's volume stays on
+  // the grid, and the liquid it displaces (C7b) is all there is to fill what it leaves.
+  for (int d = 0; d < 3; ++d) {
+    if (g.periodic(d)) continue;
+    if (g.boundary(d, 0) != BoundaryKind::outflow) cells.first[d] = 0;
+    if (g.boundary(d, 1) != BoundaryKind::outflow) cells.last[d] = g.cells()[d] - 1;
+  }
   const double cell_volume = g.cell_volume();
   std::fill(alpha_.begin(), alpha_.end(), 0.0);
   std::fill(solid_mass_.begin(), solid_mass_.end(), 0.0);

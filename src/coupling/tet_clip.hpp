@@ -12,6 +12,7 @@
 #pragma once
 #include <algorithm>
 #include <array>
+#include <climits>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -33,11 +34,14 @@ void clip_tets(const std::vector<Tet>& in, int axis, double value, bool below, s
 double tet_box_volume(const Tet& t, const Vec3& lo, const Vec3& hi);
 
 // A uniform grid of cells: cell (i, j, k) spans lo + (i, j, k) h to lo + (i + 1, j + 1, k + 1) h;
-// only the cells with begin <= index < end are visited.
+// only the cells with begin <= index < end are visited. Along a direction closed by walls, `first`
+// and `last` are the grid's first and last cells, and they reach beyond the walls: a body pressed
+// into a wall (its contact's overlap) keeps the volume beyond it in the wall's cells (theory C1).
 struct CellRange {
   Vec3 lo;
   std::array<double, 3> h{};
   std::array<int, 3> begin{}, end{};
+  std::array<int, 3> first{INT_MIN, INT_MIN, INT_MIN}, last{INT_MAX, INT_MAX, INT_MAX};
 };
 
 // A convex polytope as its faces, each a planar convex polygon (vertices in order around it).
@@ -66,7 +70,8 @@ double polytope_volume(const Polytope& p);
 // volume, each cell at most once. The tetrahedron is swept over the cells of its bounding box along
 // x, each slab along y, then z: one polytope per piece (no pieces multiply). The sweep covers the
 // whole bounding box whatever the range, and only cells in the range are reported: so a cell's
-// volume has the same bits whichever range (rank) asks.
+// volume has the same bits whichever range (rank) asks. Beyond `first` and `last` the box is cut
+// back to them: the cells there take all of the tetrahedron on their side.
 class TetRasterizer {
  public:
   template <class F>
@@ -75,8 +80,8 @@ class TetRasterizer {
     for (int d = 0; d < 3; ++d) {
       double mn = t[0][d], mx = t[0][d];
       for (int v = 1; v < 4; ++v) mn = std::min(mn, t[v][d]), mx = std::max(mx, t[v][d]);
-      a[d] = int(std::floor((mn - cells.lo[d]) / cells.h[d]));
-      b[d] = int(std::floor((mx - cells.lo[d]) / cells.h[d]));
+      a[d] = std::clamp(int(std::floor((mn - cells.lo[d]) / cells.h[d])), cells.first[d], cells.last[d]);
+      b[d] = std::clamp(int(std::floor((mx - cells.lo[d]) / cells.h[d])), cells.first[d], cells.last[d]);
       if (b[d] < cells.begin[d] || a[d] >= cells.end[d]) return;
     }
     if (a == b) {  // the common case when cells are larger than tetrahedra

@@ -586,9 +586,13 @@ TEST(MomentumBudget, GrainFallingIntoWaterInAClosedBox) {
   //    to it (43 %, reported).
   //  - `coupling.conserve_momentum` gives both leaks to the bodies: in water the budget then holds
   //    while the grain falls to 1e-3 of its peak momentum (measured 1.1e-4; the seed's scheme 0.14),
-  //    the lay-out's leak comes back in the correction to 1e-3 of itself (measured 2e-4), and once
-  //    the grain rests on the floor a residual of 2.6 % of its peak momentum builds up there (open;
-  //    guard 0.05). Bounds: what closing the leaks claims, three orders under them.
+  //    the lay-out's leak comes back in the correction to 1e-3 of itself (measured 2e-4). Once the
+  //    grain rests on the floor, a residual builds up: gas where its volume leaves the fluid part
+  //    with no liquid to fill it, and F10's residual at that density jump. Until the wall's cells
+  //    kept what lies beyond the wall (theory C1) it reached 2.6 % of the peak momentum; since,
+  //    0.6 % (the gas equals the volume min(alpha_s, 1) drops where the grain overfills a wall
+  //    cell). Bound 0.02: the first part must stay closed. Bounds: what closing the leaks claims,
+  //    three orders under them.
   for (bool conserve : {false, true})
     for (double surface : {9e-3, 4e-3}) {
       const BudgetRun r = falling_grain(MPI_COMM_WORLD, surface, 6e-3, 16, 2e-4, 700, conserve);
@@ -615,7 +619,7 @@ TEST(MomentumBudget, GrainFallingIntoWaterInAClosedBox) {
       } else if (surface > kBox) {
         EXPECT_LT(r.worst_in_flight, 1e-3 * r.peak_momentum);
         EXPECT_LT(norm(returned), 1e-3 * norm(r.stage[MomentumBudget::layout]));
-        EXPECT_LT(r.worst, 0.05 * r.peak_momentum);
+        EXPECT_LT(r.worst, 0.02 * r.peak_momentum);
       }
     }
 }
