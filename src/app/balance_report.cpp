@@ -101,9 +101,25 @@ int balance_report(const BalanceRequest& rq) {
     for (int d = 0; d < 3; ++d) requested[d] = static_cast<int>(g[d]);
   }
   Vec3 spacing{};
+  std::array<int, 3> cells{0, 0, 0};
   if (const auto fluid = root.optional_section("fluid")) {
-    const auto cells = fluid->integers("cells", 3, 1, 1 << 24);
-    for (int d = 0; d < 3; ++d) spacing[d] = (hi[d] - lo[d]) / static_cast<double>(cells[d]);
+    const auto n = fluid->integers("cells", 3, 1, 1 << 24);
+    for (int d = 0; d < 3; ++d) cells[d] = static_cast<int>(n[d]), spacing[d] = (hi[d] - lo[d]) / static_cast<double>(n[d]);
+  }
+  // A coupled run balances its flow cells (balance.cell_weight each) with its bodies' work times
+  // the DEM sub-steps of a flow step (FlowScene::rank_work): the sub-steps come from the case.
+  const bool coupled = root.has("scene") && root.text("scene") == "coupled";
+  double substeps = 1, cell_weight = 0;
+  if (coupled) {
+    const auto coupling = root.optional_section("coupling");
+    if (!coupling || !coupling->has("substeps"))
+      throw InputError("coupling.substeps", "",
+                       "the DEM sub-steps per flow step that weigh the bodies against the cells (a coupled run's "
+                       "summary.json reports them): tessera balance CASE --set coupling.substeps=L ...");
+    substeps = static_cast<double>(coupling->integer("substeps", 1, 1 << 30));
+    cell_weight = 1;
+    if (const auto b = root.optional_section("balance"))
+      if (b->has("cell_weight")) cell_weight = b->real("cell_weight", Dim::none, Range::positive());
   }
   double skin = -1;
   if (const auto solid = root.optional_section("solid")) {
@@ -134,7 +150,30 @@ int balance_report(const BalanceRequest& rq) {
   const double reach = 2 * r_max + skin;
   // The work a run's balance counts (DemSolver::work): 1 plus the listed pairs of each body.
   const std::vector<double> pairs_of = listed_pairs_per_body(x, radius, skin);
-  for (std::size_t i = 0; i < work.size(); ++i) work[i].weight = 1 + pairs_of[i];
+  for (std::size_t i = 0; i < work.size(); ++i) work[i].weight = (1 + pairs_of[i]) * substeps;
+  // The cells each rank of a grid owns (their centres in its slab, as FluidGrid's ownership), times
+  // their weight: the flow's share of a coupled rank's work.
+  const double total_cells = double(cells[0]) * cells[1] * cells[2];
+  auto cell_work = [&](std::array<int, 3> dims, const CutPlanes& interior) {
+    std::array<std::vector<double>, 3> per_slab;
+    for (int d = 0; d < 3; ++d) {
+      per_slab[d].assign(static_cast<std::size_t>(dims[d]), 0.0);
+      for (int i = 0; i < cells[d]; ++i) {
+        const double x = lo[d] + (i + 0.5) * spacing[d];
+        per_slab[d][static_cast<std::size_t>(std::upper_bound(interior[d].begin(), interior[d].end(), x) -
+                                             interior[d].begin())] += 1;
+      }
+    }
+    std::vector<double> w;
+    for (int k = 0; k < dims[2]; ++k)
+      for (int j = 0; j < dims[1]; ++j)
+        for (int i = 0; i < dims[0]; ++i) w.push_back(per_slab[0][i] * per_slab[1][j] * per_slab[2][k] * cell_weight);
+    return w;
+  };
+  auto plus = [](std::vector<double> a, const std::vector<double>& b) {
+    for (std::size_t r = 0; r < a.size(); ++r) a[r] += b[r];
+    return a;
+  };
   // What a rank does in a step for given cuts (solid/rank_load.hpp): the scaling model's input.
   auto load_json = [&](const RankLoad& l) {
     return nlohmann::json{{"bodies", l.bodies}, {"pairs", l.pairs}, {"ghosts", l.ghosts}, {"recv", l.recv},
@@ -144,6 +183,14 @@ int balance_report(const BalanceRequest& rq) {
   nlohmann::json table = nlohmann::json::array();
   std::printf("%zu bodies in [%g %g %g] - [%g %g %g] m; slabs at least %.4g m (2 r_max + skin)%s\n", work.size(), lo.x,
               lo.y, lo.z, hi.x, hi.y, hi.z, reach, spacing.x > 0 ? ", on the fluid's cell faces" : "");
+  if (coupled) {
+    double body_total = 0;
+    for (const auto& w : work) body_total += w.weight;
+    std::printf("coupled: %.0f cells x %g against the bodies' (1 + listed pairs) x %g sub-steps: %.4g and %.4g, %.1f %% "
+                "bodies\n",
+                total_cells, cell_weight, substeps, total_cells * cell_weight, body_total,
+                100 * body_total / (body_total + total_cells * cell_weight));
+  }
   // Imbalance of the work the cuts equalise (1 + listed pairs per body, as a run's balance counts)
   // and of the listed pairs each rank evaluates (a pair across a cut on both sides: the contact
   // work, solid/rank_load.hpp).
@@ -152,14 +199,24 @@ int balance_report(const BalanceRequest& rq) {
   for (const int p : rq.ranks) {
     const auto dims = Decomposition::choose_dims(p, hi - lo, requested);
     Vec3 min_width;
-    for (int d = 0; d < 3; ++d) min_width[d] = std::max(reach, spacing[d]);
+    for (int d = 0; d < 3; ++d)  // a coupled run's: the halo's two cells, the reach plus a cell
+      min_width[d] = coupled ? std::max(2 * spacing[d], reach + spacing[d]) : std::max(reach, spacing[d]);
     for (int d = 0; d < 3; ++d)
       if (dims[d] > 1 && dims[d] * min_width[d] > hi[d] - lo[d])
         throw InputError("--ranks", std::to_string(p),
                          "rank counts whose slabs are wider than the contact reach along axis " + std::to_string(d));
-    const std::vector<double> equal_work = rank_work(work, dims, equal_cuts(lo, hi, dims));
-    const CutPlanes cuts = balanced_cuts(work, lo, hi, dims, min_width, spacing);
-    const std::vector<double> balanced_work = rank_work(work, dims, cuts);
+    std::vector<double> equal_work = rank_work(work, dims, equal_cuts(lo, hi, dims));
+    // A coupled run's cut search (FlowScene::balance_if_due): histograms of the bodies and the
+    // cells as a box; the others' exact quantiles of the bodies.
+    const CutPlanes cuts =
+        coupled ? balanced_cuts(MPI_COMM_SELF, work, lo, hi, dims, min_width, spacing, 4096,
+                                {WorkBox{lo, hi, total_cells * cell_weight}})
+                : balanced_cuts(work, lo, hi, dims, min_width, spacing);
+    std::vector<double> balanced_work = rank_work(work, dims, cuts);
+    if (coupled) {
+      equal_work = plus(equal_work, cell_work(dims, equal_cuts(lo, hi, dims)));
+      balanced_work = plus(balanced_work, cell_work(dims, cuts));
+    }
     const double equal = imbalance(equal_work), balanced = imbalance(balanced_work);
     const RankLoad equal_load = dem_rank_load(x, radius, lo, hi, dims, equal_cuts(lo, hi, dims), skin);
     const RankLoad balanced_load = dem_rank_load(x, radius, lo, hi, dims, cuts, skin);
@@ -176,6 +233,7 @@ int balance_report(const BalanceRequest& rq) {
                      {"imbalance_balanced", balanced},
                      {"cuts", {cuts[0], cuts[1], cuts[2]}},
                      {"work_per_rank_equal", equal_work},  // rank order: x fastest; work = 1 + listed pairs per body
+                                                            // (coupled: times the sub-steps, plus the cells')
                      {"work_per_rank_balanced", balanced_work},
                      {"load_equal", load_json(equal_load)},
                      {"load_balanced", load_json(balanced_load)}});
@@ -183,7 +241,8 @@ int balance_report(const BalanceRequest& rq) {
   if (!rq.json_out.empty()) {
     std::ofstream out(rq.json_out);
     out << nlohmann::json{{"case", rq.case_file}, {"bodies", rq.bodies_file}, {"count", work.size()},
-                          {"skin", skin},     {"r_max", r_max},           {"table", table}}
+                          {"skin", skin},     {"r_max", r_max},           {"cells", total_cells},
+                          {"cell_weight", cell_weight}, {"substeps", substeps}, {"table", table}}
                .dump(2)
         << "\n";
   }

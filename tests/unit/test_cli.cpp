@@ -76,6 +76,38 @@ TEST(Cli, BalanceReportsTheImbalanceOfACheckpoint) {
   double four = 0;
   for (const auto& n : table[1]["load_balanced"]["pairs"]) four += n.get<double>();
   EXPECT_GT(four, one["total_pairs"].get<double>());
+  // The same bodies in a coupled case's accounting (FlowScene::rank_work): 10 x 10 x 43 cells of
+  // 0.5 mm, each weighing balance.cell_weight, plus each body's work times coupling.substeps. Equal
+  // slabs along z own the cells whose centres they hold: 11, 10, 11, 11 layers of 100 cells.
+  const std::string coupled = " --set scene=coupled --set fluid.cells=[10,10,43] --set domain.process_grid=[1,1,0]";
+  r = run("balance " + case_file + " --bodies " + (out / "checkpoint.h5").string() + " --ranks 1,4 --json " + json +
+          coupled + " --set coupling.substeps=3");
+  ASSERT_EQ(r.code, 0) << r.output;
+  {
+    std::ifstream cin(json);
+    const auto c = nlohmann::json::parse(cin);
+    EXPECT_EQ(c["cells"].get<double>(), 4300.0);
+    const double one = c["table"][0]["work_per_rank_equal"][0].get<double>();
+    const double bodies = one - 4300;  // 3 x (1 + listed pairs) per body
+    EXPECT_EQ(bodies, 3 * table[0]["work_per_rank_equal"][0].get<double>()) << r.output;
+    const auto equal = c["table"][1]["work_per_rank_equal"].get<std::vector<double>>();
+    const auto dem = table[1]["work_per_rank_equal"].get<std::vector<double>>();
+    const double layers[4] = {11, 10, 11, 11};
+    for (int k = 0; k < 4; ++k) EXPECT_EQ(equal[k], 3 * dem[k] + 100 * layers[k]) << k;
+  }
+  // Cells that outweigh the bodies: the cuts share the 43 layers as 11, 11, 11, 10 (1.023).
+  r = run("balance " + case_file + " --bodies " + (out / "checkpoint.h5").string() + " --ranks 4 --json " + json +
+          coupled + " --set coupling.substeps=3 --set balance.cell_weight=1e6");
+  ASSERT_EQ(r.code, 0) << r.output;
+  {
+    std::ifstream cin(json);
+    const auto c = nlohmann::json::parse(cin);
+    EXPECT_NEAR(c["table"][0]["imbalance_balanced"].get<double>(), 11 / 10.75, 1e-3) << r.output;
+  }
+  // Without the sub-steps the bodies cannot be weighed against the cells.
+  r = run("balance " + case_file + " --bodies " + (out / "checkpoint.h5").string() + " --ranks 4" + coupled);
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("coupling.substeps"), std::string::npos) << r.output;
   r = run("balance " + case_file + " --bodies " + (out / "checkpoint.h5").string() + " --ranks four");
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("--ranks"), std::string::npos) << r.output;
