@@ -213,9 +213,12 @@ int balance_report(const BalanceRequest& rq) {
                                 {WorkBox{lo, hi, total_cells * cell_weight}})
                 : balanced_cuts(work, lo, hi, dims, min_width, spacing);
     std::vector<double> balanced_work = rank_work(work, dims, cuts);
+    std::vector<double> equal_cells, balanced_cells;
     if (coupled) {
-      equal_work = plus(equal_work, cell_work(dims, equal_cuts(lo, hi, dims)));
-      balanced_work = plus(balanced_work, cell_work(dims, cuts));
+      equal_cells = cell_work(dims, equal_cuts(lo, hi, dims));
+      balanced_cells = cell_work(dims, cuts);
+      equal_work = plus(equal_work, equal_cells);
+      balanced_work = plus(balanced_work, balanced_cells);
     }
     const double equal = imbalance(equal_work), balanced = imbalance(balanced_work);
     const RankLoad equal_load = dem_rank_load(x, radius, lo, hi, dims, equal_cuts(lo, hi, dims), skin);
@@ -237,6 +240,10 @@ int balance_report(const BalanceRequest& rq) {
                      {"work_per_rank_balanced", balanced_work},
                      {"load_equal", load_json(equal_load)},
                      {"load_balanced", load_json(balanced_load)}});
+    if (coupled) {  // the cells' share of the work above (cells x cell_weight per rank)
+      table.back()["cell_work_equal"] = equal_cells;
+      table.back()["cell_work_balanced"] = balanced_cells;
+    }
   }
   if (!rq.json_out.empty()) {
     std::ofstream out(rq.json_out);

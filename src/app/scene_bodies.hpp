@@ -61,6 +61,7 @@ class SceneBodies {
   // The bodies' part of a rank's work for balancing (issue 19): DemSolver::work scaled by the last
   // flow step's sub-steps (the DEM's work per flow step).
   std::vector<WorkSample> work() const;
+  std::size_t halo_bytes_sent() const { return dem_->halo_bytes_sent(); }  // the DEM's ghosts and migrations
   // The busy seconds of the bodies' stages so far (DEM sub-steps, solid fraction, fluid force, pore
   // liquid, correction), this rank.
   double busy_seconds();

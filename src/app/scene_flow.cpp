@@ -550,13 +550,32 @@ void FlowScene::summarise(nlohmann::json& s) {
     const double local = rank_work(box.weight, body_work());
     s["imbalance"] = imbalance(decomp_->comm(), local);
     const int size = decomp_->size();
-    const double mine[2] = {double(owned), local};
-    std::vector<double> all(2 * std::size_t(size));
-    MPI_Allgather(mine, 2, MPI_DOUBLE, all.data(), 2, MPI_DOUBLE, decomp_->comm());
-    nlohmann::json per_rank{{"cells", nlohmann::json::array()}, {"work", nlohmann::json::array()}};
-    for (int r = 0; r < size; ++r) {
-      per_rank["cells"].push_back(long(all[2 * r]));
-      per_rank["work"].push_back(all[2 * r + 1]);
+    // And what each rank's ghost exchanges sent over the run: the flow's fields and multigrid
+    // (messages, bytes), the bodies' (bytes).
+    const CellHalo::Traffic fields = flow_->field_traffic(), multigrid = flow_->multigrid_traffic();
+    constexpr int n = 7;
+    const double mine[n] = {double(owned),
+                            local,
+                            double(fields.messages),
+                            fields.bytes,
+                            double(multigrid.messages),
+                            multigrid.bytes,
+                            bodies_ ? double(bodies_->halo_bytes_sent()) : 0.0};
+    std::vector<double> all(n * std::size_t(size));
+    MPI_Allgather(mine, n, MPI_DOUBLE, all.data(), n, MPI_DOUBLE, decomp_->comm());
+    const char* names[n] = {"cells", "work", "field_halo_messages", "field_halo_bytes", "multigrid_halo_messages",
+                            "multigrid_halo_bytes", "body_halo_bytes"};
+    nlohmann::json per_rank;
+    for (int k = 0; k < n; ++k) {
+      if (k == n - 1 && !bodies_) break;
+      per_rank[names[k]] = nlohmann::json::array();
+      for (int r = 0; r < size; ++r) {
+        const double v = all[std::size_t(n * r + k)];
+        if (k == 1)
+          per_rank[names[k]].push_back(v);
+        else
+          per_rank[names[k]].push_back(long(v));
+      }
     }
     s["per_rank"] = per_rank;
     if (balance_.enabled) {

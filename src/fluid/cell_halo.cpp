@@ -129,6 +129,8 @@ void CellHalo::exchange(std::initializer_list<std::vector<double>*> fields) cons
       }
       MPI_Isend(send_buf_[side].data(), int(send_buf_[side].size()), MPI_DOUBLE, S.rank, 2 * d + side, comm_,
                 &req[nreq++]);
+      ++traffic_.messages;
+      traffic_.bytes += double(send_buf_[side].size() * sizeof(double));
     }
     MPI_Waitall(nreq, req, MPI_STATUSES_IGNORE);
     for (int side = 0; side < 2; ++side) {

@@ -44,6 +44,18 @@ class CellHalo {
   // Fills the ghosts of every field (collective over the communicator).
   void exchange(std::initializer_list<std::vector<double>*> fields) const;
 
+  // What this rank has sent since the halo was made: messages to other ranks and their bytes (a
+  // periodic copy onto itself is not a message).
+  struct Traffic {
+    long messages = 0;
+    double bytes = 0;
+    Traffic& operator+=(const Traffic& o) {
+      messages += o.messages, bytes += o.bytes;
+      return *this;
+    }
+  };
+  const Traffic& traffic() const { return traffic_; }
+
  private:
   // A box of local (ghosted-array) indices [lo, hi).
   struct Box {
@@ -65,6 +77,7 @@ class CellHalo {
   std::array<std::ptrdiff_t, 3> stride_{};
   std::array<std::array<Side, 2>, 3> sides_{};
   mutable std::array<std::vector<double>, 2> send_buf_, recv_buf_;
+  mutable Traffic traffic_;
 };
 
 }  // namespace tessera

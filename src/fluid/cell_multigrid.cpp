@@ -375,4 +375,11 @@ void CellMultigrid::apply(Vec xin, Vec yout) {
   check(VecRestoreArray(yout, &out), "VecRestoreArray");
 }
 
+CellHalo::Traffic CellMultigrid::halo_traffic() const {
+  CellHalo::Traffic t;
+  for (const auto& L : levels_)
+    if (L->halo) t += L->halo->traffic();
+  return t;
+}
+
 }  // namespace tessera

@@ -55,6 +55,7 @@ class CellMultigrid {
   void apply_operator(Vec x, Vec y);
   int levels() const { return int(levels_.size()); }
   double exchange_seconds() const { return exchange_seconds_; }  // ghost exchanges, all levels
+  CellHalo::Traffic halo_traffic() const;                          // what they sent, all levels
 
  private:
   struct Level {

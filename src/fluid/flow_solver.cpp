@@ -38,6 +38,7 @@ FlowSolver::FlowSolver(const Decomposition& decomp, const FlowSettings& settings
 
 void FlowSolver::repartition(const Decomposition& decomp) {
   timers();  // the old grid's and multigrid's exchange seconds into the timers
+  multigrid_carried_ += poisson_->halo_traffic();
   poisson_.reset();
   grid_->repartition(decomp);
   fields_reported_ = grid_->exchange_seconds(), multigrid_reported_ = 0;

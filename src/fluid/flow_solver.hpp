@@ -191,6 +191,14 @@ class FlowSolver {
     return timers_;
   }
   std::string poisson_description() const { return poisson_->description(); }
+  // What this rank's ghost exchanges sent since the start (messages, bytes): the fields' and the
+  // multigrid's (PETSc's own traffic in the Krylov solver is not counted).
+  CellHalo::Traffic field_traffic() const { return grid_->halo_traffic(); }
+  CellHalo::Traffic multigrid_traffic() const {
+    CellHalo::Traffic t = multigrid_carried_;
+    t += poisson_->halo_traffic();
+    return t;
+  }
 
  private:
   void make_fields();        // every grid field, zero
@@ -241,6 +249,7 @@ class FlowSolver {
   long parity_ = 0;  // sweeps done: the order alternates
   double last_dt_ = 0;
   double fields_reported_ = 0, multigrid_reported_ = 0;
+  CellHalo::Traffic multigrid_carried_;  // the multigrids of earlier partitions
 };
 
 }  // namespace tessera

@@ -112,6 +112,7 @@ void FluidGrid::build(const Decomposition& decomp) {
 FluidGrid::~FluidGrid() { release(); }
 
 void FluidGrid::release() {
+  if (halo_) carried_ += halo_->traffic();
   halo_.reset();
   if (dap_) DMDestroy(&dap_);
   if (da_) DMDestroy(&da_);

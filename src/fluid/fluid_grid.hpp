@@ -99,6 +99,12 @@ class FluidGrid {
   double reduce_min(double local) const;
   // Wall seconds spent in exchange() so far (communication, inside the phases that call it).
   double exchange_seconds() const { return exchange_seconds_; }
+  // Messages and bytes this rank's exchange() calls have sent, over every partition it has had.
+  CellHalo::Traffic halo_traffic() const {
+    CellHalo::Traffic t = carried_;
+    if (halo_) t += halo_->traffic();
+    return t;
+  }
 
  private:
   void build(const Decomposition& decomp);
@@ -109,6 +115,7 @@ class FluidGrid {
   DM da_ = nullptr, dap_ = nullptr;
   std::unique_ptr<CellHalo> halo_;
   mutable double exchange_seconds_ = 0;
+  CellHalo::Traffic carried_;  // the earlier partitions' halos'
   std::array<int, 3> n_{}, s_{}, m_{}, gs_{}, gm_{};
   std::array<std::ptrdiff_t, 3> stride_{};
   std::array<double, 3> h_{};

@@ -58,6 +58,7 @@ class PressurePoisson {
   bool singular() const { return singular_; }
   std::string description() const;  // KSP and PC types, for the log
   double exchange_seconds() const { return multigrid_ ? multigrid_->exchange_seconds() : 0.0; }
+  CellHalo::Traffic halo_traffic() const { return multigrid_ ? multigrid_->halo_traffic() : CellHalo::Traffic{}; }
 
  private:
   const FluidGrid& grid_;

@@ -148,9 +148,18 @@ TEST(CoupledScene, OneAndTwoRanksAgree) {
   // (rtol 1e-10; with 1e-14 the differences are 1e-14). Over longer runs the grains' contacts
   // amplify such differences as any round-off (1e-5 of the speed after 30 steps, at rtol 1e-14 too).
   const std::vector<std::string> sets = {"run.max_steps=3", "output.snapshot_interval=0"};
-  run_on(1, sets, kDir + "/np1");
-  run_on(2, sets, kDir + "/np2");
+  const auto s1 = run_on(1, sets, kDir + "/np1");
+  const auto s2 = run_on(2, sets, kDir + "/np2");
   if (world_rank() != 0) return;
+  // The ranks' halo traffic in summary.json (issue 19): none on one rank (closed box); on two, the
+  // same on both (the 16^3 grid halved), each field message 2 layers of 16 x 16 cells per field.
+  for (const char* k : {"field_halo_messages", "field_halo_bytes", "multigrid_halo_messages", "multigrid_halo_bytes"}) {
+    EXPECT_EQ(s1["per_rank"][k][0].get<long>(), 0) << k;
+    EXPECT_GT(s2["per_rank"][k][0].get<long>(), 0) << k;
+    EXPECT_EQ(s2["per_rank"][k][0].get<long>(), s2["per_rank"][k][1].get<long>()) << k;
+  }
+  EXPECT_EQ(s2["per_rank"]["field_halo_bytes"][0].get<long>() % (2 * 16 * 16 * 8), 0);
+  EXPECT_GT(s2["per_rank"]["body_halo_bytes"][0].get<long>() + s2["per_rank"]["body_halo_bytes"][1].get<long>(), 0);
   const auto a = dataset(kDir + "/np1/checkpoint.h5", "velocity"), b = dataset(kDir + "/np2/checkpoint.h5", "velocity");
   double du = 0, umax = 0;
   for (std::size_t i = 0; i < a.size(); ++i) du = std::max(du, std::abs(a[i] - b[i])), umax = std::max(umax, std::abs(a[i]));
