@@ -13,8 +13,10 @@ each run's summary.json into speed-up, parallel efficiency and the time per phas
   tools/scaling.py model CASE.yaml --ranks 2,4,16,64 --out D [--bodies CHECKPOINT] [--cuts balanced] [--png F] [--set ...]
         predicts the loop time on P ranks from D's 1-rank runs, the work per rank that `tessera balance`
         counts for P on one process, and D/network.json; where D holds measured runs on P ranks it
-        prints the model's error. The blast (its levelled step), or a DEM scene of spheres or discs
-        whose bodies --bodies gives (the run's starting checkpoint).
+        prints the model's error. The blast (its levelled step), a DEM scene of spheres or discs
+        whose bodies --bodies gives (the run's starting checkpoint), or a coupled case (its bed as
+        --bodies; D also needs a 2-rank run, whose halo traffic per flow step the model scales;
+        coupled_model below).
 
 The blast's model (stability levels): every sub-step takes its busiest rank's work and ends in the
 halo's exchange: each rank sends each neighbour the states of its due elements that the neighbour's
@@ -258,6 +260,9 @@ def model(a):
         sys.exit(f"scaling model: no {net_path} (tools/scaling.py network --out {a.out})")
     net = json.load(open(net_path))
     ranks = sorted(set([1] + a.ranks))
+    if "coupling" in runs[1][0] and not any(x.startswith("coupling.substeps=") for x in a.set):
+        # A coupled case's bodies weigh by the DEM sub-steps of a flow step: the 1-rank run's.
+        a.set.append(f"coupling.substeps={max(1, round(runs[1][0]['coupling']['substeps_per_flow_step']))}")
     bal = os.path.join(a.out, "balance.json")
     cmd = [TESSERA, "balance", os.path.abspath(a.case), "--ranks", ",".join(map(str, ranks)), "--json", bal]
     if a.bodies:
@@ -266,7 +271,12 @@ def model(a):
         cmd += ["--set", x]
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
     b = json.load(open(bal))
-    rows = (blast_model if "partition" in b else dem_model)(a, b, runs, net)
+    if "partition" in b:
+        rows = blast_model(a, b, runs, net)
+    elif b.get("cells"):
+        rows = coupled_model(a, b, runs, net)
+    else:
+        rows = dem_model(a, b, runs, net)
     print("| ranks | compute (s) | exchange (s) | predicted loop time (s) | speed-up | efficiency | measured (s) | model error |")
     print("|---|---|---|---|---|---|---|---|")
     t1 = rows[0]["predicted"]
@@ -398,6 +408,91 @@ def dem_model(a, b, runs, net):
         rows.append({"ranks": p, "grid": dims, "compute": compute, "exchange": exchange,
                      "predicted": compute + exchange, "measured": median_loop(runs, p),
                      "imbalance": max(load["pairs"]) * p / sum(load["pairs"])})
+    return rows
+
+
+def coupled_model(a, b, runs, net):
+    """A coupled flow step on P ranks: its stages end in collective waits (the Poisson's reductions,
+    the sub-steps' list checks, the bodies' sums), so each stage takes its busiest rank. Per rank, the
+    flow's and the cell-wise coupling stages scale with its cells, the DEM sub-steps as dem_model's
+    step (pairs, bodies, owned plus ghost bodies, from `tessera balance`), the solid fraction and the
+    fluid force with its owned plus ghost bodies; each costed by the 1-rank run's timers. Then the
+    exchanges: the field and multigrid halos (their exchanges per flow step, and bytes per face cell,
+    from the 2-rank run's per-rank traffic; at P each exchange pays one latency per split direction
+    plus the busiest rank's face bytes over the bandwidth), the Poisson's 3 reductions per Krylov
+    iteration, and per DEM sub-step dem_model's swaps and list check, plus 6 swaps of the bodies' sums
+    per flow step (C3's loads, C4a's sums and velocities, C7's moves, the ghosts' refresh)."""
+    if "sendrecv_latency_s" not in net:
+        sys.exit("scaling model: network.json predates the point-to-point measurement; run `network` again")
+    if 2 not in runs:
+        sys.exit("scaling model: a coupled case needs a 2-rank run too (its halo traffic per flow step)")
+    one, two = runs[1][0], runs[2][0]
+    t1, steps = median_loop(runs, 1), one["steps"]
+
+    def avg(*names):
+        return t1 * statistics.mean(sum(s["timers"][n]["avg"] for n in names if n in s["timers"]) / s["loop_seconds"]
+                                    for s in runs[1])
+
+    L = one["coupling"]["substeps_per_flow_step"]
+    flow = avg("flow")
+    cellwise = avg("pore_liquid", "correction")
+    bodywise = avg("solid_fraction", "fluid_force")
+    contact = avg("dem/contact_forces")
+    per_body = avg("dem/integrate", "dem/wall_forces")
+    per_local = avg("dem/neighbor", "dem/migration", "dem/ghost_comm")
+    # The DEM's phase timers also count its work outside the sub-steps stage (the ghosts' refresh and
+    # lists the coupling's stages ask for, counted there too): scaled to the stage's own time.
+    dem_busy = avg("dem_substeps") - avg("dem/reduction")
+    scale = min(1.0, dem_busy / max(1e-30, contact + per_body + per_local))
+    contact, per_body, per_local = scale * contact, scale * per_body, scale * per_local
+    dem_rest = max(0.0, dem_busy - contact - per_body - per_local)
+    rest = max(0.0, t1 - flow - cellwise - bodywise - avg("dem_substeps"))
+    cuts = "balanced" if a.cuts == "balanced" else "equal"
+    row1 = b["table"][0]
+    N, B, C = float(b["cells"]), float(b["count"]), row1["load_" + cuts]["total_pairs"]
+    # The 2-rank run's traffic: exchanges per flow step (one neighbour: a message an exchange) and
+    # bytes per cell of the face between the two ranks.
+    split = [d for d in range(3) if two["process_grid"][d] > 1]
+    if len(split) != 1:
+        sys.exit("scaling model: the 2-rank run must be split along one direction")
+    grid = [int(row1["cell_slabs_" + cuts][d][0]) for d in range(3)]  # one rank: the whole grid
+    cells2 = [n // (2 if d == split[0] else 1) for d, n in enumerate(grid)]
+    face2 = cells2[(split[0] + 1) % 3] * cells2[(split[0] + 2) % 3]
+    pr = two["per_rank"]
+    msgs = {k: max(pr[k + "_halo_messages"]) / two["steps"] for k in ("field", "multigrid")}
+    per_face = {k: max(pr[k + "_halo_bytes"]) / max(1, max(pr[k + "_halo_messages"])) / face2
+                for k in ("field", "multigrid")}
+    iters = one["poisson"]["iterations_per_step"]
+    lat, bw, red = net["sendrecv_latency_s"], net["sendrecv_bandwidth_bytes_per_s"], net["allreduce_s"]
+    print(f"model: {b['case']}, {int(N)} cells, {b['count']} bodies, {C:.0f} listed pairs, {steps} flow steps of "
+          f"{L:.1f} sub-steps; 1 rank {t1:.2f} s = flow {flow:.2f} + cells' coupling {cellwise:.2f} + bodies' "
+          f"coupling {bodywise:.2f} + DEM {contact + per_body + per_local + dem_rest:.2f} + rest {rest:.2f}; per flow "
+          f"step {msgs['field']:.1f} field and {msgs['multigrid']:.1f} multigrid exchanges, "
+          f"{per_face['field']:.1f} and {per_face['multigrid']:.1f} B per face cell; {iters:.1f} Krylov iterations")
+    rows = []
+    for row in b["table"]:
+        p, dims, load = row["ranks"], row["grid"], row["load_" + cuts]
+        slabs = row["cell_slabs_" + cuts]
+        cw = b["cell_weight"]
+        cells = [c / cw for c in row["cell_work_" + cuts]]
+        local = [load["bodies"][r] + load["ghosts"][r] for r in range(p)]
+        compute = (max((flow + cellwise + rest) * cells[r] / N for r in range(p)) +
+                   max(bodywise * local[r] / B for r in range(p)) +
+                   max(contact * load["pairs"][r] / C + (per_body + dem_rest) * load["bodies"][r] / B +
+                       per_local * local[r] / B for r in range(p)))
+        exchange = 0.0
+        if p > 1:
+            # The busiest rank's face along each split direction (cells of the other two directions).
+            face = {d: max(slabs[(d + 1) % 3][i] * slabs[(d + 2) % 3][j] for i in range(dims[(d + 1) % 3])
+                           for j in range(dims[(d + 2) % 3])) for d in range(3) if dims[d] > 1}
+            halo = sum(msgs[k] * sum(lat + per_face[k] * f / bw for f in face.values()) for k in ("field", "multigrid"))
+            reductions = 3 * iters * math.ceil(math.log2(p)) * red
+            swaps = sum(2 * (lat + 72.0 * max(load["recv"][r][2 * d + s] for r in range(p) for s in range(2)) / bw)
+                        for d in face)
+            dem = L * (math.ceil(math.log2(p)) * red + swaps) + 6 * swaps
+            exchange = steps * (halo + reductions + dem)
+        rows.append({"ranks": p, "grid": dims, "compute": compute, "exchange": exchange,
+                     "predicted": compute + exchange, "measured": median_loop(runs, p)})
     return rows
 
 

@@ -154,7 +154,7 @@ int balance_report(const BalanceRequest& rq) {
   // The cells each rank of a grid owns (their centres in its slab, as FluidGrid's ownership), times
   // their weight: the flow's share of a coupled rank's work.
   const double total_cells = double(cells[0]) * cells[1] * cells[2];
-  auto cell_work = [&](std::array<int, 3> dims, const CutPlanes& interior) {
+  auto cell_slabs = [&](std::array<int, 3> dims, const CutPlanes& interior) {
     std::array<std::vector<double>, 3> per_slab;
     for (int d = 0; d < 3; ++d) {
       per_slab[d].assign(static_cast<std::size_t>(dims[d]), 0.0);
@@ -164,6 +164,10 @@ int balance_report(const BalanceRequest& rq) {
                                              interior[d].begin())] += 1;
       }
     }
+    return per_slab;
+  };
+  auto cell_work = [&](std::array<int, 3> dims, const CutPlanes& interior) {
+    const auto per_slab = cell_slabs(dims, interior);
     std::vector<double> w;
     for (int k = 0; k < dims[2]; ++k)
       for (int j = 0; j < dims[1]; ++j)
@@ -240,9 +244,12 @@ int balance_report(const BalanceRequest& rq) {
                      {"work_per_rank_balanced", balanced_work},
                      {"load_equal", load_json(equal_load)},
                      {"load_balanced", load_json(balanced_load)}});
-    if (coupled) {  // the cells' share of the work above (cells x cell_weight per rank)
+    if (coupled) {  // the cells' share of the work above (cells x cell_weight per rank), and the
+                    // cells of each slab along x, y, z (the halo's faces: the scaling model's)
       table.back()["cell_work_equal"] = equal_cells;
       table.back()["cell_work_balanced"] = balanced_cells;
+      table.back()["cell_slabs_equal"] = cell_slabs(dims, equal_cuts(lo, hi, dims));
+      table.back()["cell_slabs_balanced"] = cell_slabs(dims, cuts);
     }
   }
   if (!rq.json_out.empty()) {
