@@ -345,10 +345,13 @@ void SceneBodies::summarise(nlohmann::json& s, long steps_run, double volume, co
     q["pore_liquid_max_passes"] = pore_passes_max_;
     q["pore_liquid_max_residual"] = pore_residual_max_;
   }
-  long layouts = coupled_->solid().layouts_computed();  // bodies laid out again (C1), all ranks
-  MPI_Allreduce(MPI_IN_PLACE, &layouts, 1, MPI_LONG, MPI_SUM, decomp_.comm());
+  // Bodies laid out again (C1), all ranks; of them, those whose nodes could not reach the rank's
+  // cells (ghosts: skipped).
+  long layouts[2] = {coupled_->solid().layouts_computed(), coupled_->solid().layouts_elsewhere()};
+  MPI_Allreduce(MPI_IN_PLACE, layouts, 2, MPI_LONG, MPI_SUM, decomp_.comm());
   s["coupling"] = {{"dem_stable_dt", coupled_->dem_stable_dt()},
-                   {"layouts", layouts},
+                   {"layouts", layouts[0]},
+                   {"layouts_elsewhere", layouts[1]},
                    {"substeps_per_flow_step", steps_run ? double(substeps_total_) / steps_run : 0.0},
                    {"fluid_force", coupling_.fluid_force},
                    {"bodies", coupling_.fixed_bodies ? "fixed" : "moving"}};

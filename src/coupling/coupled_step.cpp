@@ -58,7 +58,7 @@ void CoupledSolver::start(bool fresh) {
 void CoupledSolver::take_over(const CoupledSolver& old) {
   timers_ = old.timers_;
   budget_ = old.budget_;
-  solid_.count_layouts(old.solid_.layouts_computed());
+  solid_.count_layouts(old.solid_.layouts_computed(), old.solid_.layouts_elsewhere());
 }
 
 int CoupledSolver::substeps_for(double dt) const {

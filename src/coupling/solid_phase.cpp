@@ -56,6 +56,7 @@ SolidPhase::SolidPhase(const FluidGrid& grid, const DemSolver& dem, double fluid
   for (const ShapeTemplate& t : dem.shapes()) {
     double r = 0;
     for (const Vec3& n : t.nodes) r = std::max(r, norm(n));
+    node_reach_.push_back(r);
     turn_step_.push_back(layout_step_ > 0 && r > 0
                              ? std::min(std::exp2(std::floor(std::log2(layout_step_ / (4 * r)))), std::exp2(-6.0))
                              : 0.0);
@@ -78,6 +79,21 @@ void SolidPhase::update(const DemSolver& dem) {
     if (g.boundary(d, 0) != BoundaryKind::outflow) cells.first[d] = 0;
     if (g.boundary(d, 1) != BoundaryKind::outflow) cells.last[d] = g.cells()[d] - 1;
   }
+  // The box of this rank's cells (reaching beyond a wall as they do): a body whose nodes cannot
+  // reach it (most ghosts) has no volume here, and its tetrahedra are not turned or swept.
+  Vec3 own_lo, own_hi;
+  for (int d = 0; d < 3; ++d) {
+    own_lo[d] = g.begin(d) == cells.first[d] ? -HUGE_VAL : g.lo()[d] + g.begin(d) * g.h(d);
+    own_hi[d] = g.end(d) - 1 == cells.last[d] ? HUGE_VAL : g.lo()[d] + g.end(d) * g.h(d);
+  }
+  auto reaches_own_cells = [&](const Vec3& x, double reach) {
+    double d2 = 0;
+    for (int d = 0; d < 3; ++d) {
+      const double out = std::max({own_lo[d] - x[d], x[d] - own_hi[d], 0.0});
+      d2 += out * out;
+    }
+    return d2 <= reach * reach;
+  };
   const double cell_volume = g.cell_volume();
   std::fill(alpha_.begin(), alpha_.end(), 0.0);
   std::fill(solid_mass_.begin(), solid_mass_.end(), 0.0);
@@ -106,12 +122,18 @@ void SolidPhase::update(const DemSolver& dem) {
       lay.pose = pose;
       const Quaternion q{pose[3], pose[4], pose[5], pose[6]};
       const Vec3 xb{pose[0], pose[1], pose[2]};
-      world.resize(t.nodes.size());
-      for (std::size_t n = 0; n < t.nodes.size(); ++n) world[n] = xb + q.rotate(t.nodes[n]);
       scratch_.clear();
-      for (const auto& tet : t.tetrahedra)
-        raster_.overlaps(Tet{world[tet[0]], world[tet[1]], world[tet[2]], world[tet[3]]}, cells,
-                         [&](int i, int j, int k, double v) { scratch_.emplace_back(g.at(i, j, k), v); });
+      // The reach with a margin for the rotation's round-off (1e-9 of it): a node beyond it lies
+      // outside the box, and so does every tetrahedron.
+      if (reaches_own_cells(xb, node_reach_[static_cast<std::size_t>(p.shape[b] - 1)] * (1 + 1e-9))) {
+        world.resize(t.nodes.size());
+        for (std::size_t n = 0; n < t.nodes.size(); ++n) world[n] = xb + q.rotate(t.nodes[n]);
+        for (const auto& tet : t.tetrahedra)
+          raster_.overlaps(Tet{world[tet[0]], world[tet[1]], world[tet[2]], world[tet[3]]}, cells,
+                           [&](int i, int j, int k, double v) { scratch_.emplace_back(g.at(i, j, k), v); });
+      } else {
+        ++layouts_elsewhere_;
+      }
       // One entry per cell, its tetrahedra summed in mesh order.
       std::stable_sort(scratch_.begin(), scratch_.end(),
                        [](const auto& a, const auto& c) { return a.first < c.first; });

@@ -104,7 +104,13 @@ class SolidPhase {
   using Pose = std::array<double, 7>;  // x, y, z, qw, qx, qy, qz
   Pose layout_pose(const Vec3& x, const Quaternion& q, int shape) const;
   long layouts_computed() const { return layouts_; }  // this rank, whole run
-  void count_layouts(long earlier) { layouts_ += earlier; }  // those of a solid phase this one replaced
+  // Of those, the bodies whose nodes could not reach this rank's cells (ghosts, mostly): nothing
+  // was turned or swept for them.
+  long layouts_elsewhere() const { return layouts_elsewhere_; }
+  void count_layouts(long earlier, long elsewhere) {  // those of a solid phase this one replaced
+    layouts_ += earlier;
+    layouts_elsewhere_ += elsewhere;
+  }
   SolidPhaseStats stats() const;  // collective
 
  private:
@@ -141,8 +147,9 @@ class SolidPhase {
   };
   std::unordered_map<std::int64_t, Layout> cache_;
   double layout_step_ = 0;
+  std::vector<double> node_reach_;  // per shape: its farthest node from the centre
   std::vector<double> turn_step_;  // per shape (index shape - 1): quaternion components' rounding
-  long generation_ = 0, layouts_ = 0;
+  long generation_ = 0, layouts_ = 0, layouts_elsewhere_ = 0;
   std::vector<std::pair<std::size_t, double>> scratch_;
   CellVolumes old_cells_;
   BodyMoves moves_;
