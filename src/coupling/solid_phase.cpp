@@ -39,9 +39,14 @@ SolidPhase::SolidPhase(const FluidGrid& grid, const DemSolver& dem, double fluid
                          " kg/m^3): lighter bodies make the explicit fluid force unstable (measured: stable at "
                          "0.25, growing oscillations at 0.1; docs/theory.md C6a)");
   const double half_cell = 0.5 * std::max({grid.h(0), grid.h(1), grid.h(2)});
-  for (const ShapeTemplate& t : dem.shapes()) {
-    double reach = 0;
-    for (const Vec3& n : t.nodes) reach = std::max(reach, norm(n));
+  for (const ShapeTemplate& t : dem.shapes()) {  // each shape's farthest node from its centre
+    double r = 0;
+    for (const Vec3& n : t.nodes) r = std::max(r, norm(n));
+    node_reach_.push_back(r);
+  }
+  for (std::size_t i = 0; i < dem.shapes().size(); ++i) {
+    const ShapeTemplate& t = dem.shapes()[i];
+    const double reach = node_reach_[i];
     const double ghost_reach = t.bounding_radius + dem.max_radius() + dem.skin();
     if (reach + half_cell > ghost_reach)
       throw InputError("fluid.cells", "cells of " + std::to_string(2 * half_cell) + " m",
@@ -53,10 +58,7 @@ SolidPhase::SolidPhase(const FluidGrid& grid, const DemSolver& dem, double fluid
   // quaternion by at most step, the renormalisation by as much again; the angle is twice that), so
   // a node at distance r moves by at most 4 step r: the largest power of 2 with 4 step r <= the
   // position step keeps every node within it (at most 2^-6, a small turn however small the body).
-  for (const ShapeTemplate& t : dem.shapes()) {
-    double r = 0;
-    for (const Vec3& n : t.nodes) r = std::max(r, norm(n));
-    node_reach_.push_back(r);
+  for (const double r : node_reach_) {
     turn_step_.push_back(layout_step_ > 0 && r > 0
                              ? std::min(std::exp2(std::floor(std::log2(layout_step_ / (4 * r)))), std::exp2(-6.0))
                              : 0.0);
