@@ -306,7 +306,15 @@ def plot_model(a, rows):
     ax[0].set_xlabel("ranks"), ax[0].set_ylabel("speed-up against 1 rank"), ax[0].legend()
     labels = [str(p) for p in ps]
     # Core-seconds (P x loop time): flat when the scaling is ideal.
-    ax[1].bar(labels, [p * r["compute"] for p, r in zip(ps, rows)], label="compute (busiest rank)")
+    if all("stages" in r for r in rows):  # a coupled step's stages, each its busiest rank's
+        bottom = [0.0] * len(rows)
+        for name, text in (("cells", "flow and cell-wise coupling"), ("bodies", "solid fraction and fluid force"),
+                           ("dem", "DEM sub-steps")):
+            h = [p * r["stages"][name] for p, r in zip(ps, rows)]
+            ax[1].bar(labels, h, bottom=bottom, label=text + " (busiest rank)")
+            bottom = [b + x for b, x in zip(bottom, h)]
+    else:
+        ax[1].bar(labels, [p * r["compute"] for p, r in zip(ps, rows)], label="compute (busiest rank)")
     ax[1].bar(labels, [p * r["exchange"] for p, r in zip(ps, rows)], bottom=[p * r["compute"] for p, r in zip(ps, rows)],
               label="exchange")
     if measured:
@@ -416,7 +424,9 @@ def coupled_model(a, b, runs, net):
     the sub-steps' list checks, the bodies' sums), so each stage takes its busiest rank. Per rank, the
     flow's and the cell-wise coupling stages scale with its cells, the DEM sub-steps as dem_model's
     step (pairs, bodies, owned plus ghost bodies, from `tessera balance`), the solid fraction and the
-    fluid force with its owned plus ghost bodies; each costed by the 1-rank run's timers. Then the
+    fluid force with the bodies it lays out (owned ones and the ghosts whose nodes reach its cells:
+    `laid_out`, or every ghost from an older `tessera balance`); each costed by the 1-rank run's
+    timers. Then the
     exchanges: the field and multigrid halos (their exchanges per flow step, and bytes per face cell,
     from the 2-rank run's per-rank traffic; at P each exchange pays one latency per split direction
     plus the busiest rank's face bytes over the bandwidth), the Poisson's 3 reductions per Krylov
@@ -476,10 +486,12 @@ def coupled_model(a, b, runs, net):
         cw = b["cell_weight"]
         cells = [c / cw for c in row["cell_work_" + cuts]]
         local = [load["bodies"][r] + load["ghosts"][r] for r in range(p)]
-        compute = (max((flow + cellwise + rest) * cells[r] / N for r in range(p)) +
-                   max(bodywise * local[r] / B for r in range(p)) +
-                   max(contact * load["pairs"][r] / C + (per_body + dem_rest) * load["bodies"][r] / B +
-                       per_local * local[r] / B for r in range(p)))
+        laid = load.get("laid_out", local)
+        stages = {"cells": max((flow + cellwise + rest) * cells[r] / N for r in range(p)),
+                  "bodies": max(bodywise * laid[r] / B for r in range(p)),
+                  "dem": max(contact * load["pairs"][r] / C + (per_body + dem_rest) * load["bodies"][r] / B +
+                             per_local * local[r] / B for r in range(p))}
+        compute = sum(stages.values())
         exchange = 0.0
         if p > 1:
             # The busiest rank's face along each split direction (cells of the other two directions).
@@ -491,7 +503,7 @@ def coupled_model(a, b, runs, net):
                         for d in face)
             dem = L * (math.ceil(math.log2(p)) * red + swaps) + 6 * swaps
             exchange = steps * (halo + reductions + dem)
-        rows.append({"ranks": p, "grid": dims, "compute": compute, "exchange": exchange,
+        rows.append({"ranks": p, "grid": dims, "compute": compute, "exchange": exchange, "stages": stages,
                      "predicted": compute + exchange, "measured": median_loop(runs, p)})
     return rows
 

@@ -16,6 +16,7 @@
 #include "core/errors.hpp"
 #include "core/h5_file.hpp"
 #include "solid/rank_load.hpp"
+#include "solid/shape.hpp"
 
 namespace tessera {
 
@@ -135,13 +136,30 @@ int balance_report(const BalanceRequest& rq) {
   int cols = 0;
   const std::vector<double> rows = f.read_all<double>("bodies", cols);
   if (cols < 9) throw InputError("--bodies", rq.bodies_file, "a DEM checkpoint (its 'bodies' rows)");
+  // A coupled run lays out each body's tetrahedra on the ranks its nodes reach: each shape's
+  // farthest node (SolidPhase's reach), read from the case's shapes.
+  std::vector<double> shape_reach;
+  if (coupled) {
+    const std::string case_dir = std::filesystem::absolute(std::filesystem::path(rq.case_file)).parent_path().string();
+    for (const ShapeTemplate& t : read_shapes(root.section("solid"), case_dir)) {
+      double r = 0;
+      for (const Vec3& n : t.nodes) r = std::max(r, norm(n));
+      shape_reach.push_back(r);
+    }
+  }
   std::vector<WorkSample> work;
   std::vector<Vec3> x;
-  std::vector<double> radius;
+  std::vector<double> radius, node_reach;
   double r_max = 0, r_min = 1e300;
   for (std::size_t i = 0; i + static_cast<std::size_t>(cols) <= rows.size(); i += static_cast<std::size_t>(cols)) {
     x.push_back({rows[i + 6], rows[i + 7], rows[i + 8]});
     radius.push_back(rows[i + 3]);
+    if (coupled) {  // shape k + 1 is the case's k-th (shape 0, a plain sphere, reaches its radius)
+      const auto k = static_cast<std::size_t>(rows[i + 2]);
+      if (k > shape_reach.size())
+        throw InputError("--bodies", rq.bodies_file, "bodies of the case's shapes (one has shape " + std::to_string(k) + ")");
+      node_reach.push_back(k == 0 ? rows[i + 3] : shape_reach[k - 1]);
+    }
     work.push_back({x.back(), 1.0});
     r_max = std::max(r_max, rows[i + 3]), r_min = std::min(r_min, rows[i + 3]);
   }
@@ -180,8 +198,10 @@ int balance_report(const BalanceRequest& rq) {
   };
   // What a rank does in a step for given cuts (solid/rank_load.hpp): the scaling model's input.
   auto load_json = [&](const RankLoad& l) {
-    return nlohmann::json{{"bodies", l.bodies}, {"pairs", l.pairs}, {"ghosts", l.ghosts}, {"recv", l.recv},
-                          {"total_pairs", l.total_pairs}, {"pair_imbalance", imbalance(l.pairs)}};
+    nlohmann::json j{{"bodies", l.bodies}, {"pairs", l.pairs}, {"ghosts", l.ghosts}, {"recv", l.recv},
+                     {"total_pairs", l.total_pairs}, {"pair_imbalance", imbalance(l.pairs)}};
+    if (!l.laid_out.empty()) j["laid_out"] = l.laid_out;
+    return j;
   };
 
   nlohmann::json table = nlohmann::json::array();
@@ -225,8 +245,8 @@ int balance_report(const BalanceRequest& rq) {
       balanced_work = plus(balanced_work, balanced_cells);
     }
     const double equal = imbalance(equal_work), balanced = imbalance(balanced_work);
-    const RankLoad equal_load = dem_rank_load(x, radius, lo, hi, dims, equal_cuts(lo, hi, dims), skin);
-    const RankLoad balanced_load = dem_rank_load(x, radius, lo, hi, dims, cuts, skin);
+    const RankLoad equal_load = dem_rank_load(x, radius, lo, hi, dims, equal_cuts(lo, hi, dims), skin, node_reach);
+    const RankLoad balanced_load = dem_rank_load(x, radius, lo, hi, dims, cuts, skin, node_reach);
     std::string text;
     for (int d = 0; d < 3; ++d) {
       if (d) text += " |";

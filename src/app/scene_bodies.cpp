@@ -355,6 +355,11 @@ void SceneBodies::summarise(nlohmann::json& s, long steps_run, double volume, co
                    {"substeps_per_flow_step", steps_run ? double(substeps_total_) / steps_run : 0.0},
                    {"fluid_force", coupling_.fluid_force},
                    {"bodies", coupling_.fixed_bodies ? "fixed" : "moving"}};
+  // The DEM's contact list (as the DEM scenes report it): its builds, and its entries over all ranks.
+  s["neighbor_list_builds"] = dem_->list_builds();
+  long listed = static_cast<long>(dem_->pair_count());
+  MPI_Allreduce(MPI_IN_PLACE, &listed, 1, MPI_LONG, MPI_SUM, decomp_.comm());
+  s["listed_pairs"] = listed;
   // The leak number dt nu / h^2 (liquid, smallest cell side) over this run's steps: how much flow the
   // partly covered cells let through scales with it (docs/validation.md, the packed bed).
   if (steps_run > 0) {

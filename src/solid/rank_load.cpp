@@ -42,13 +42,16 @@ std::vector<double> listed_pairs_per_body(const std::vector<Vec3>& x, const std:
 }
 
 RankLoad dem_rank_load(const std::vector<Vec3>& x, const std::vector<double>& radius, const Vec3& lo, const Vec3& hi,
-                       std::array<int, 3> dims, const CutPlanes& interior, double skin) {
+                       std::array<int, 3> dims, const CutPlanes& interior, double skin,
+                       const std::vector<double>& node_reach) {
   const std::size_t ranks = static_cast<std::size_t>(dims[0]) * dims[1] * dims[2];
   RankLoad load;
   load.bodies.assign(ranks, 0.0);
   load.pairs.assign(ranks, 0.0);
   load.ghosts.assign(ranks, 0.0);
   load.recv.assign(ranks, {});
+  const bool lays_out = !node_reach.empty();
+  if (lays_out) load.laid_out.assign(ranks, 0.0);
   if (x.empty()) return load;
   std::array<std::vector<double>, 3> planes;  // dims[d] + 1 planes per direction
   for (int d = 0; d < 3; ++d) {
@@ -67,6 +70,7 @@ RankLoad dem_rank_load(const std::vector<Vec3>& x, const std::vector<double>& ra
     c[0] = g % dims[0], c[1] = (g / dims[0]) % dims[1], c[2] = g / (dims[0] * dims[1]);
     owner[a] = static_cast<std::size_t>(g);
     load.bodies[owner[a]] += 1;
+    if (lays_out) load.laid_out[owner[a]] += 1;
     // Ghosts: per direction, the slab itself or a neighbour across a face within the reach; every
     // combination but the body's own cell is a rank holding a copy.
     const double reach = radius[a] + r_max + skin;
@@ -84,6 +88,17 @@ RankLoad dem_rank_load(const std::vector<Vec3>& x, const std::vector<double>& ra
           if (t == c) continue;
           const std::size_t r = rank_of(t);
           load.ghosts[r] += 1;
+          if (lays_out) {  // does a node reach the rank's sub-box (open where it meets the domain's side)?
+            double d2 = 0;
+            for (int d = 0; d < 3; ++d) {
+              const auto i = static_cast<std::size_t>(t[d]);
+              const double below = t[d] > 0 ? planes[d][i] - x[a][d] : 0.0;
+              const double above = t[d] + 1 < dims[d] ? x[a][d] - planes[d][i + 1] : 0.0;
+              const double out = std::max({below, above, 0.0});
+              d2 += out * out;
+            }
+            if (d2 <= node_reach[a] * node_reach[a]) load.laid_out[r] += 1;
+          }
           // It arrives in the last direction in which it moves (x, then y, then z).
           for (int d = 2; d >= 0; --d)
             if (t[d] != c[d]) {

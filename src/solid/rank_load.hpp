@@ -20,6 +20,10 @@ struct RankLoad {
   std::vector<double> bodies;  // owned bodies per rank (rank order: x fastest)
   std::vector<double> pairs;   // listed pairs each rank evaluates
   std::vector<double> ghosts;  // ghost copies each rank holds
+  // Bodies each rank lays out over its cells (a coupled run's solid fraction, SolidPhase::update):
+  // its owned bodies and the ghosts whose farthest node reaches its sub-box, open at the domain's
+  // sides (the wall cells take what lies beyond them). Empty unless the nodes' reach is given.
+  std::vector<double> laid_out;
   // Ghosts each rank receives in each of the six swaps (direction d, from the low / high side):
   // recv[rank][2 d + side]. A swap moves them every step (x, v, omega).
   std::vector<std::array<double, 6>> recv;
@@ -31,8 +35,10 @@ struct RankLoad {
 std::vector<double> listed_pairs_per_body(const std::vector<Vec3>& x, const std::vector<double>& radius, double skin);
 
 // x: body centres, radius: their radii; dims and interior cuts as Decomposition's; skin the
-// neighbour list's.
+// neighbour list's; node_reach: each body's farthest tetrahedron node from its centre (a coupled
+// run's bodies), or empty.
 RankLoad dem_rank_load(const std::vector<Vec3>& x, const std::vector<double>& radius, const Vec3& lo, const Vec3& hi,
-                       std::array<int, 3> dims, const CutPlanes& interior, double skin);
+                       std::array<int, 3> dims, const CutPlanes& interior, double skin,
+                       const std::vector<double>& node_reach = {});
 
 }  // namespace tessera

@@ -21,6 +21,7 @@
 #include "core/errors.hpp"
 #include "core/exact_sum.hpp"
 #include "coupling/coupled_step.hpp"
+#include "solid/rank_load.hpp"
 #include "solid/shape.hpp"
 #include "support/dem_fixture.hpp"
 
@@ -174,6 +175,54 @@ TEST(SolidFraction, HoldsTheBodiesExactlyWithTheSameBitsOnAnyRankCount) {
     solid.update(*rig.dem);
     EXPECT_EQ(solid.layouts_computed(), before);
   }
+}
+
+// The scaling model's per-rank counts (solid/rank_load.hpp, computed on one process from the
+// bodies' centres) against what each rank holds and lays out: its ghosts, and its owned bodies plus
+// the ghosts whose nodes reach its cells (SolidPhase::update skips the others). Grains at 0.3, 1.5,
+// 1.6 and 2.9 mm from the cuts: ghosts that reach, ghosts that do not (node reach 1 mm, ghost reach
+// 2.1 mm), and bodies no other rank holds.
+TEST(SolidFraction, EachRankLaysOutTheBodiesTheScalingModelCounts) {
+  DemSettings s;
+  s.gravity = {0, 0, -9.81};
+  s.time_step = 1e-6;
+  DemRig rig(MPI_COMM_WORLD, {0, 0, 0}, {kBox, kBox, kBox}, sand_model(2650), Walls{}, s);
+  rig.dem->set_shapes({grain()});
+  const double at[4] = {1.1e-3, 2.5e-3, 4.3e-3, 5.6e-3};
+  std::vector<Vec3> xs;
+  int id = 0;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j)
+      for (int k = 0; k < 4; ++k, ++id) {
+        xs.push_back({at[i] + 1e-5 * k, at[j] - 1e-5 * i, at[k] + 1e-5 * j});
+        rig.dem->add_body(id, 0, 1, xs.back(), turn(id), {});
+      }
+  rig.dem->setup();
+  FlowSolver flow(*rig.decomp, water_and_air(20));
+  flow.initialize([](int, int, int) { return FlowSolver::CellState{1.0, {}}; });
+  SolidPhase solid(flow.grid(), *rig.dem, 1000);
+  solid.update(*rig.dem);
+  const ShapeTemplate& t = rig.dem->shapes()[0];
+  double node_reach = 0;
+  for (const Vec3& n : t.nodes) node_reach = std::max(node_reach, norm(n));
+  const std::vector<double> radius(xs.size(), t.bounding_radius), reach(xs.size(), node_reach);
+  const auto& dims = rig.decomp->dims();
+  const RankLoad load = dem_rank_load(xs, radius, {0, 0, 0}, {kBox, kBox, kBox}, dims, rig.decomp->interior_cuts(),
+                                      rig.dem->skin(), reach);
+  const auto& c = rig.decomp->coords();
+  const auto me = static_cast<std::size_t>(c[0] + dims[0] * (c[1] + dims[1] * c[2]));
+  EXPECT_EQ(load.bodies[me], static_cast<double>(rig.dem->particles().owned));
+  EXPECT_EQ(load.ghosts[me], static_cast<double>(rig.dem->particles().ghosts));
+  EXPECT_EQ(load.laid_out[me], static_cast<double>(solid.layouts_computed() - solid.layouts_elsewhere()));
+  // Not vacuous on a split grid: some ghosts are laid out, some are not.
+  double ghosts = 0, laid_ghosts = 0;
+  for (std::size_t r = 0; r < load.ghosts.size(); ++r)
+    ghosts += load.ghosts[r], laid_ghosts += load.laid_out[r] - load.bodies[r];
+  if (load.ghosts.size() > 1) {
+    EXPECT_GT(laid_ghosts, 0);
+    EXPECT_LT(laid_ghosts, 0.8 * ghosts);
+  }
+  if (root()) std::printf("%zu ranks: %.0f ghosts, %.0f of them laid out\n", load.ghosts.size(), ghosts, laid_ghosts);
 }
 
 // A grain at (4, 4, zc) mm in a box of water up to z0 at rest; returns the fluid force and moment
