@@ -1,10 +1,12 @@
 #!/usr/bin/python3
 """Grid study of a settling sphere against ten Cate et al. (2002, Phys. Fluids 14, 4012).
 
-Runs cases/coupled/settling_sphere.yaml (case E3 by default; --case E2 or E4) on 4.2, 8.4 and
-(with --fine) 16.8 cells per diameter, prints the terminal speed (largest downward speed), its
-error against the measured value and the observed order, and draws the approach to terminal speed
-(--png). Reuses a run directory that already holds a finished series.csv.
+Runs cases/coupled/settling_sphere.yaml (case E3 by default; --case E2 or E4) on 4.2 and 8.4 cells
+per diameter (--fine adds 16.8; --grids 4.2,8.4,12.6 names any), prints the terminal speed (largest
+downward speed) and its error against the measured value, and with three grids or more the observed
+order of the last three (their own convergence, whatever the ratios: u_i = u + C h_i^p solved for p)
+and the extrapolated speed; draws the approach to terminal speed (--png). Reuses a run directory
+that already holds a finished series.csv.
 
 --height H (m) makes the box H tall instead of the experiment's 0.16 m, the sphere starting 40 mm
 below its top as in the experiment, and --end T runs to T seconds instead of the case's 0.8 s: in
@@ -26,7 +28,33 @@ CASES = {  # liquid density, viscosity, measured terminal speed, Reynolds number
     "E3": (962, 0.113, 0.091, 11.6),
     "E4": (960, 0.058, 0.128, 31.9),
 }
-GRIDS = [("4.2", "[28,28,44]"), ("8.4", "[56,56,88]"), ("16.8", "[112,112,176]")]
+
+def cells_for(per_d, height):
+    """The grid for per_d cells per diameter (15 mm) over the 100 mm cross-section: 4.2 -> 28 x 28 x 44
+    in the experiment's 160 mm box (nz = 11 nx / 7: cells about as tall as wide), nz scaled with the box."""
+    nx = round(per_d * 100 / 15)
+    return nx, round(nx * 11 / 7 * height / 0.16)
+
+
+def observed_order(h, u):
+    """p and the limit from three grids (h decreasing): (u1 - u2) / (u2 - u3) = (h1^p - h2^p) / (h2^p - h3^p),
+    solved by bisection on p in [0.05, 8]; None when the differences change sign (not converging)."""
+    d12, d23 = u[0] - u[1], u[1] - u[2]
+    if d12 == 0 or d23 == 0 or (d12 > 0) != (d23 > 0):
+        return None
+    target = d12 / d23
+    f = lambda p: (h[0] ** p - h[1] ** p) / (h[1] ** p - h[2] ** p) - target
+    lo, hi = 0.05, 8.0
+    if f(lo) * f(hi) > 0:
+        return None
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if f(lo) * f(mid) <= 0:
+            hi = mid
+        else:
+            lo = mid
+    p = 0.5 * (lo + hi)
+    return p, u[2] - d23 / ((h[1] / h[2]) ** p - 1)
 
 
 def series(path):
@@ -41,6 +69,7 @@ def main():
     ap.add_argument("--ranks", type=int, default=2)
     ap.add_argument("--out", default="runs/settling")
     ap.add_argument("--fine", action="store_true", help="also 16.8 cells per diameter (about an hour on 2 cores)")
+    ap.add_argument("--grids", help="cells per diameter, comma-separated (default 4.2,8.4; --fine adds 16.8)")
     ap.add_argument("--height", type=float, default=0.16, help="box height in m (the experiment's: 0.16)")
     ap.add_argument("--end", type=float, default=0.8, help="end time in s (the case's: 0.8)")
     ap.add_argument("--png")
@@ -50,10 +79,11 @@ def main():
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                OMPI_MCA_rmaps_base_oversubscribe="1")
     results = []
-    for per_d, cells in GRIDS[: 3 if a.fine else 2]:
+    grids = a.grids.split(",") if a.grids else ["4.2", "8.4"] + (["16.8"] if a.fine else [])
+    for per_d in grids:
         out = os.path.join(a.out, f"{a.case}_{per_d}")
-        nx, _, nz = (int(c) for c in cells.strip("[]").split(","))
-        cells = f"[{nx},{nx},{round(nz * a.height / 0.16)}]"  # the cells' size along z kept
+        nx, nz = cells_for(float(per_d), a.height)
+        cells = f"[{nx},{nx},{nz}]"
         top = f"[0.05,0.05,{a.height}]"
         done = os.path.exists(os.path.join(out, "summary.json"))
         if not done:
@@ -74,6 +104,16 @@ def main():
         order = "" if prev is None else f"  observed order {math.log2(abs(prev) / abs(err)):.2f}"
         print(f"  {per_d:>5} cells per diameter: {u:.4f} m/s, error {100 * err:+.1f} %{order}")
         prev = err
+    if len(results) >= 3:
+        last = results[-3:]
+        fit = observed_order([1 / float(r[0]) for r in last], [r[3] for r in last])
+        names = ", ".join(r[0] for r in last)
+        if fit is None:
+            print(f"  {names} cells: not converging monotonically (no observed order)")
+        else:
+            p, limit = fit
+            print(f"  {names} cells: observed order {p:.2f}, extrapolated {limit:.4f} m/s "
+                  f"(error {100 * (limit - measured) / measured:+.1f} %)")
     if a.png:
         import matplotlib
         matplotlib.use("Agg")
