@@ -97,12 +97,18 @@ std::vector<BodyRecord> all_bodies(const DemSolver& dem) {
   return all;
 }
 
-TEST(SolidFraction, HoldsTheBodiesExactlyWithTheSameBitsOnAnyRankCount) {
+// Sand grains (the shape above) in the 8 mm box under gravity, a DEM step of 1 us; bodies to add.
+DemRig grain_rig() {
   DemSettings s;
   s.gravity = {0, 0, -9.81};
   s.time_step = 1e-6;
   DemRig rig(MPI_COMM_WORLD, {0, 0, 0}, {kBox, kBox, kBox}, sand_model(2650), Walls{}, s);
   rig.dem->set_shapes({grain()});
+  return rig;
+}
+
+TEST(SolidFraction, HoldsTheBodiesExactlyWithTheSameBitsOnAnyRankCount) {
+  DemRig rig = grain_rig();
   // 27 grains on a 2.5 mm lattice around the box centre, turned: the middle layer sits on the cuts.
   int id = 0, straddling = 0;
   for (int i = -1; i <= 1; ++i)
@@ -183,11 +189,7 @@ TEST(SolidFraction, HoldsTheBodiesExactlyWithTheSameBitsOnAnyRankCount) {
 // 1.6 and 2.9 mm from the cuts: ghosts that reach, ghosts that do not (node reach 1 mm, ghost reach
 // 2.1 mm), and bodies no other rank holds.
 TEST(SolidFraction, EachRankLaysOutTheBodiesTheScalingModelCounts) {
-  DemSettings s;
-  s.gravity = {0, 0, -9.81};
-  s.time_step = 1e-6;
-  DemRig rig(MPI_COMM_WORLD, {0, 0, 0}, {kBox, kBox, kBox}, sand_model(2650), Walls{}, s);
-  rig.dem->set_shapes({grain()});
+  DemRig rig = grain_rig();
   const double at[4] = {1.1e-3, 2.5e-3, 4.3e-3, 5.6e-3};
   std::vector<Vec3> xs;
   int id = 0;
@@ -233,11 +235,7 @@ struct Buoyancy {
 };
 
 Buoyancy resting_grain(int cells, double zc, double z0) {
-  DemSettings s;
-  s.gravity = {0, 0, -9.81};
-  s.time_step = 1e-6;
-  DemRig rig(MPI_COMM_WORLD, {0, 0, 0}, {kBox, kBox, kBox}, sand_model(2650), Walls{}, s);
-  rig.dem->set_shapes({grain()});
+  DemRig rig = grain_rig();
   const Vec3 xc{4e-3 + 1e-5, 4e-3 - 2e-5, zc};
   rig.dem->add_body(0, 0, 1, xc, turn(3), {});
   rig.dem->setup();
