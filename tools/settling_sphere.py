@@ -71,6 +71,7 @@ def main():
     ap.add_argument("--grids", help="cells per diameter, comma-separated (default 4.2,8.4; --fine adds 16.8)")
     ap.add_argument("--height", type=float, default=0.16, help="box height in m (the experiment's: 0.16)")
     ap.add_argument("--end", type=float, default=0.8, help="end time in s (the case's: 0.8)")
+    ap.add_argument("--set", action="append", default=[], help="KEY=VALUE for every run (tessera run --set)")
     ap.add_argument("--png")
     a = ap.parse_args()
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -92,7 +93,7 @@ def main():
                    "--set", f"fluid.liquid.viscosity={mu} Pa*s", "--set", "output.snapshot_interval=0",
                    "--set", f"domain.box_max={top}", "--set", f"solid.walls.0.max={top}",
                    "--set", f"initial.liquid.0.box.max={top}", "--set", f"bodies.list.0.position=[0,0,{a.height - 0.04}]",
-                   "--set", f"run.end_time={a.end}"]
+                   "--set", f"run.end_time={a.end}"] + [x for kv in a.set for x in ("--set", kv)]
             subprocess.run(cmd, check=True, env=env)
         t, v = series(os.path.join(out, "series.csv"))
         results.append((per_d, t, v, max(v)))
