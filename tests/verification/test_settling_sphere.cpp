@@ -7,8 +7,8 @@
 // not a measurement: the walls slow the sphere by 4 %, the floor stops it). The shipped case
 // (cases/coupled/settling_sphere.yaml) to 1.25 s: the sphere is fastest at 1.0-1.1 s, two diameters
 // above the floor, then slows. Bounds: within 4 % on 4.2 cells per diameter and 2 % on 8.4, and
-// closer on the finer grid (docs/validation.md: the grid study converges at first order to 1.5 %
-// below u_max, so an error that grows with the grid or a coarse grid far off fails).
+// closer on the finer grid (docs/validation.md: the grid study, 4.2 to 16.8 cells, converges to
+// 0.3 % below u_max; an error that grows with the grid or a coarse grid far off fails).
 #include <gtest/gtest.h>
 #include <mpi.h>
 
