@@ -141,11 +141,7 @@ int balance_report(const BalanceRequest& rq) {
   std::vector<double> shape_reach;
   if (coupled) {
     const std::string case_dir = std::filesystem::absolute(std::filesystem::path(rq.case_file)).parent_path().string();
-    for (const ShapeTemplate& t : read_shapes(root.section("solid"), case_dir)) {
-      double r = 0;
-      for (const Vec3& n : t.nodes) r = std::max(r, norm(n));
-      shape_reach.push_back(r);
-    }
+    for (const ShapeTemplate& t : read_shapes(root.section("solid"), case_dir)) shape_reach.push_back(farthest_node(t));
   }
   std::vector<WorkSample> work;
   std::vector<Vec3> x;

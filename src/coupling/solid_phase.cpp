@@ -39,11 +39,7 @@ SolidPhase::SolidPhase(const FluidGrid& grid, const DemSolver& dem, double fluid
                          " kg/m^3): lighter bodies make the explicit fluid force unstable (measured: stable at "
                          "0.25, growing oscillations at 0.1; docs/theory.md C6a)");
   const double half_cell = 0.5 * std::max({grid.h(0), grid.h(1), grid.h(2)});
-  for (const ShapeTemplate& t : dem.shapes()) {  // each shape's farthest node from its centre
-    double r = 0;
-    for (const Vec3& n : t.nodes) r = std::max(r, norm(n));
-    node_reach_.push_back(r);
-  }
+  for (const ShapeTemplate& t : dem.shapes()) node_reach_.push_back(farthest_node(t));
   for (std::size_t i = 0; i < dem.shapes().size(); ++i) {
     const ShapeTemplate& t = dem.shapes()[i];
     const double reach = node_reach_[i];

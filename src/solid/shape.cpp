@@ -64,6 +64,12 @@ ShapeTemplate ShapeTemplate::from_mesh(std::string name, std::vector<Vec3> nodes
   return s;
 }
 
+double farthest_node(const ShapeTemplate& t) {
+  double r = 0;
+  for (const Vec3& n : t.nodes) r = std::max(r, norm(n));
+  return r;
+}
+
 std::vector<ShapeTemplate> read_shapes(const ConfigNode& solid, const std::string& case_dir) {
   std::vector<ShapeTemplate> out;
   for (const ConfigNode& n : solid.list("shapes")) {

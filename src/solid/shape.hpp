@@ -48,6 +48,10 @@ struct ShapeTemplate {
 void ellipsoid_mesh(const Vec3& semi_axes, int rings, int segments, std::vector<Vec3>& nodes,
                     std::vector<std::array<int, 4>>& tets);
 
+// The farthest node of the mesh from the body's centre: the reach of its tetrahedra (the solid
+// fraction's lay-out, coupling/solid_phase.cpp; the scaling model's count of it, solid/rank_load).
+double farthest_node(const ShapeTemplate& t);
+
 // Reads `solid.shapes` (case_dir resolves relative mesh paths). Index k of the result is shape k+1.
 std::vector<ShapeTemplate> read_shapes(const ConfigNode& solid, const std::string& case_dir);
 

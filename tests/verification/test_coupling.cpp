@@ -205,9 +205,7 @@ TEST(SolidFraction, EachRankLaysOutTheBodiesTheScalingModelCounts) {
   SolidPhase solid(flow.grid(), *rig.dem, 1000);
   solid.update(*rig.dem);
   const ShapeTemplate& t = rig.dem->shapes()[0];
-  double node_reach = 0;
-  for (const Vec3& n : t.nodes) node_reach = std::max(node_reach, norm(n));
-  const std::vector<double> radius(xs.size(), t.bounding_radius), reach(xs.size(), node_reach);
+  const std::vector<double> radius(xs.size(), t.bounding_radius), reach(xs.size(), farthest_node(t));
   const auto& dims = rig.decomp->dims();
   const RankLoad load = dem_rank_load(xs, radius, {0, 0, 0}, {kBox, kBox, kBox}, dims, rig.decomp->interior_cuts(),
                                       rig.dem->skin(), reach);
