@@ -126,9 +126,8 @@ void SolidPhase::update(const DemSolver& dem) {
       if (reaches_own_cells(xb, node_reach_[static_cast<std::size_t>(p.shape[b] - 1)] * (1 + 1e-9))) {
         world.resize(t.nodes.size());
         for (std::size_t n = 0; n < t.nodes.size(); ++n) world[n] = xb + q.rotate(t.nodes[n]);
-        for (const auto& tet : t.tetrahedra)
-          raster_.overlaps(Tet{world[tet[0]], world[tet[1]], world[tet[2]], world[tet[3]]}, cells,
-                           [&](int i, int j, int k, double v) { scratch_.emplace_back(g.at(i, j, k), v); });
+        lay_out_body(t, world, cells, raster_, body_polytope_,
+                     [&](int i, int j, int k, double v) { scratch_.emplace_back(g.at(i, j, k), v); });
       } else {
         ++layouts_elsewhere_;
       }

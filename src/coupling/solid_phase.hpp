@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
-// The bodies as the flow sees them (theory C1-C5): each body's tetrahedra, at its current position
-// and orientation, laid exactly over the grid cells (tet_clip.hpp).
+// The bodies as the flow sees them (theory C1-C5): each body's tetrahedra (or, for a convex body,
+// the polytope its surface bounds), at its current position and orientation, laid exactly over the
+// grid cells (tet_clip.hpp).
 //
 //   update()             per local body (owned and ghost, in canonical order), the volume V_bc it
 //                        shares with each owned cell c; the solid fraction alpha_s = sum_b V_bc / V_c
@@ -37,8 +38,24 @@
 #include "fluid/flow_solver.hpp"
 #include "solid/dem_solver.hpp"
 #include "solid/rigid_rotation.hpp"
+#include "solid/shape.hpp"
 
 namespace tessera {
+
+// Lays one body out over `cells` (theory C1): fn(i, j, k, volume) per cell it shares volume with.
+// world: the shape's nodes at the body's pose. A convex shape is swept whole (one piece per cell),
+// any other tetrahedron by tetrahedron (a cell may then be reported once per tetrahedron).
+template <class F>
+void lay_out_body(const ShapeTemplate& shape, const std::vector<Vec3>& world, const CellRange& cells,
+                  CellRasterizer& raster, Polytope& scratch, F&& fn) {
+  if (shape.convex) {
+    scratch.set_triangles(world, shape.surface);
+    raster.overlaps(scratch, cells, fn);
+    return;
+  }
+  for (const auto& tet : shape.tetrahedra)
+    raster.overlaps(Tet{world[tet[0]], world[tet[1]], world[tet[2]], world[tet[3]]}, cells, fn);
+}
 
 // How the correction treats a cell the bodies cover in part (theory C4c).
 struct PartialCells {
@@ -136,7 +153,8 @@ class SolidPhase {
   double inv_h2_ = 0, inv_h_ = 0;  // means of 1 / h_d^2 and 1 / h_d over the three directions
   std::vector<double> slip_;  // |u - U| per cell at the step's start (the rate's inertial part)
   void solid_momentum(const DemSolver& dem);  // P_s per cell from the bodies' velocities now
-  TetRasterizer raster_;
+  CellRasterizer raster_;
+  Polytope body_polytope_;  // a convex body's surface, in the world
   // Lay-outs by body order key, kept while the body's rounded pose is unchanged.
   using CellVolumes = std::vector<std::pair<std::size_t, double>>;
   struct Layout {

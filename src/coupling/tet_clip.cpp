@@ -70,6 +70,16 @@ void clip_tets(const std::vector<Tet>& in, int axis, double value, bool below, s
   }
 }
 
+void Polytope::set_triangles(const std::vector<Vec3>& nodes, const std::vector<std::array<int, 3>>& triangles) {
+  clear();
+  points.reserve(3 * triangles.size());
+  start.reserve(triangles.size() + 1);
+  for (const auto& tri : triangles) {
+    for (int v : tri) points.push_back(nodes[static_cast<std::size_t>(v)]);
+    close_face();
+  }
+}
+
 void Polytope::set_tet(const Tet& t) {
   clear();
   const int f[4][3] = {{0, 1, 2}, {0, 1, 3}, {0, 2, 3}, {1, 2, 3}};

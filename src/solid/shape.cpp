@@ -61,7 +61,29 @@ ShapeTemplate ShapeTemplate::from_mesh(std::string name, std::vector<Vec3> nodes
   s.sphere_radius = cs.radius;
   for (const auto& c : s.spheres) s.bounding_radius = std::max(s.bounding_radius, norm(c) + cs.radius);
   s.envelope = envelope_deviation(s.nodes, s.surface, cs);
+  s.convex = bounds_convex_polytope(s.nodes, s.surface, s.volume);
   return s;
+}
+
+bool bounds_convex_polytope(const std::vector<Vec3>& nodes, const std::vector<std::array<int, 3>>& surface,
+                            double volume) {
+  if (surface.size() < 4 || nodes.empty()) return false;
+  Vec3 lo = nodes[0], hi = nodes[0];
+  for (const Vec3& p : nodes)
+    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], p[d]), hi[d] = std::max(hi[d], p[d]);
+  const double tol = 1e-10 * norm(hi - lo);
+  double enclosed = 0;  // divergence theorem over the triangles
+  for (const auto& tri : surface) {
+    const Vec3 &a = nodes[static_cast<std::size_t>(tri[0])], &b = nodes[static_cast<std::size_t>(tri[1])],
+               &c = nodes[static_cast<std::size_t>(tri[2])];
+    const Vec3 n = cross(b - a, c - a);
+    const double area2 = norm(n);
+    if (!(area2 > 0)) return false;
+    for (const Vec3& p : nodes)
+      if (dot(n, p - a) > tol * area2) return false;
+    enclosed += dot(a, cross(b, c)) / 6;
+  }
+  return std::abs(enclosed - volume) <= 1e-9 * volume;
 }
 
 double farthest_node(const ShapeTemplate& t) {

@@ -35,6 +35,10 @@ struct ShapeTemplate {
   double sphere_radius = 0;
   double bounding_radius = 0;  // max |c| + sphere radius: the body's reach from its centre
   EnvelopeDeviation envelope;  // of the contact spheres against the mesh surface
+  // The surface bounds a convex polytope (every node on the inner side of every surface triangle's
+  // plane, and the surface encloses the tetrahedra's volume): the solid fraction lays the body out
+  // as that one polytope (coupling/solid_phase.cpp, theory C1).
+  bool convex = false;
 
   // Builds the template from a mesh in any frame: moves it to the principal frame, places spheres.
   static ShapeTemplate from_mesh(std::string name, std::vector<Vec3> nodes, std::vector<std::array<int, 4>> tets,
@@ -47,6 +51,11 @@ struct ShapeTemplate {
 // ellipsoid, so the mesh is inscribed (its volume is below the ellipsoid's; T13).
 void ellipsoid_mesh(const Vec3& semi_axes, int rings, int segments, std::vector<Vec3>& nodes,
                     std::vector<std::array<int, 4>>& tets);
+
+// Whether the closed surface (outward triangles) bounds a convex polytope of the given volume: every
+// node lies on the inner side of every triangle's plane (within 1e-10 of the mesh's size).
+bool bounds_convex_polytope(const std::vector<Vec3>& nodes, const std::vector<std::array<int, 3>>& surface,
+                            double volume);
 
 // The farthest node of the mesh from the body's centre: the reach of its tetrahedra (the solid
 // fraction's lay-out, coupling/solid_phase.cpp; the scaling model's count of it, solid/rank_load).

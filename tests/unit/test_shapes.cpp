@@ -95,5 +95,30 @@ TEST(Shapes, CaseFileErrorsNameTheKey) {
             std::string::npos);
 }
 
+TEST(Shapes, ConvexSurfacesAreTold) {
+  // A spheroid's fan mesh bounds a convex polytope (its lat-long quads are planar trapezoids); the
+  // same mesh with one surface node pulled in, and an L of two tetrahedra, do not. The solid
+  // fraction lays only the first out whole (coupling/solid_phase.cpp).
+  std::vector<Vec3> nodes;
+  std::vector<std::array<int, 4>> tets;
+  ellipsoid_mesh({0.635, 0.26, 0.26}, 5, 9, nodes, tets);
+  const ShapeTemplate grain = ShapeTemplate::from_mesh("grain", nodes, tets, 20, 0.1);
+  EXPECT_TRUE(grain.convex);
+  std::vector<Vec3> dented = nodes;
+  dented[5] = dented[5] * 0.9;  // a surface node (node 0 is the centre)
+  EXPECT_FALSE(ShapeTemplate::from_mesh("dented", dented, tets, 20, 0.05).convex);
+  // Two unit corner tetrahedra side by side along x, the second rotated a quarter turn about x:
+  // together they are not convex.
+  const std::vector<Vec3> l_nodes{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 0}, {2, 0, 0}, {1, 0, 1}, {1, -1, 0}};
+  const std::vector<std::array<int, 4>> l_tets{{0, 1, 2, 3}, {4, 5, 6, 7}};
+  const auto l_surface = boundary_triangles(l_nodes, l_tets);
+  EXPECT_FALSE(bounds_convex_polytope(l_nodes, l_surface, 2.0 / 6));
+  // One tetrahedron is convex; a wrong volume (a surface that does not enclose the mesh) is not.
+  const std::vector<std::array<int, 4>> one{{0, 1, 2, 3}};
+  const std::vector<Vec3> corner(l_nodes.begin(), l_nodes.begin() + 4);
+  EXPECT_TRUE(bounds_convex_polytope(corner, boundary_triangles(corner, one), 1.0 / 6));
+  EXPECT_FALSE(bounds_convex_polytope(corner, boundary_triangles(corner, one), 2.0 / 6));
+}
+
 }  // namespace
 }  // namespace tessera
