@@ -197,6 +197,7 @@ void DemScene::summarise(nlohmann::json& s) {
   s["dt"] = dem_->dt();
   s["contact_law"] = dem_->model().law_name();
   s["neighbor_list_builds"] = dem_->list_builds();
+  s["neighbor_list_relists"] = dem_->list_relists();
   long counts[3] = {static_cast<long>(dem_->pair_count()), static_cast<long>(dem_->halo_bytes_sent()),
                     static_cast<long>(dem_->migrations())};
   MPI_Allreduce(MPI_IN_PLACE, counts, 3, MPI_LONG, MPI_SUM, comm);

@@ -357,6 +357,7 @@ void SceneBodies::summarise(nlohmann::json& s, long steps_run, double volume, co
                    {"bodies", coupling_.fixed_bodies ? "fixed" : "moving"}};
   // The DEM's contact list (as the DEM scenes report it): its builds, and its entries over all ranks.
   s["neighbor_list_builds"] = dem_->list_builds();
+  s["neighbor_list_relists"] = dem_->list_relists();
   long listed = static_cast<long>(dem_->pair_count());
   MPI_Allreduce(MPI_IN_PLACE, &listed, 1, MPI_LONG, MPI_SUM, decomp_.comm());
   s["listed_pairs"] = listed;

@@ -27,6 +27,7 @@ DemSettings DemSettings::from_config(const ConfigNode& solid) {
   s.impact_velocity = solid.real("impact_velocity", Dim::velocity, Range::positive(), s.impact_velocity);
   // 0 (what the resolved case records when the key is absent) or no key: 0.5 r_min.
   if (const double skin = solid.real("neighbor_skin", Dim::length, Range::non_negative(), 0.0); skin > 0) s.skin = skin;
+  s.relist = solid.flag("neighbor_relist", s.relist);
   if (const auto plane = solid.optional_section("plane")) {
     const std::string n = plane->choice("normal", {"x", "y", "z"});
     s.plane_normal = n[0] - 'x';
@@ -325,21 +326,10 @@ void DemSolver::rebuild() {
     auto t = timers_.scope("neighbor");
     if (shaped()) {
       entities_.layout(shapes_, key_stride_);
-      std::vector<double> e_x(3 * entities_.size());  // the elements' positions at this build
-      for (std::size_t k = 0; k < entities_.size(); ++k) {
-        const Vec3 c = entities_.centre(k);
-        e_x[3 * k] = c.x, e_x[3 * k + 1] = c.y, e_x[3 * k + 2] = c.z;
-      }
-      ContactElements e;
-      e.size = entities_.size();
-      e.owned = entities_.owned();
-      e.x = e_x.data();
-      e.radius = entities_.element_radius().data();
-      e.key = entities_.element_key().data();
-      e.body = entities_.element_body().data();
-      e.body_mass = p_.mass.data();
-      pairs_.list().build(e, skin_, histories);
+      pairs_.list().build(list_elements(), skin_, histories);
       q_build_.assign(p_.q.begin(), p_.q.begin() + 4 * static_cast<std::ptrdiff_t>(p_.owned));
+      x_list_.assign(p_.x.begin(), p_.x.begin() + 3 * static_cast<std::ptrdiff_t>(p_.size()));
+      q_list_.assign(p_.q.begin(), p_.q.begin() + 4 * static_cast<std::ptrdiff_t>(p_.size()));
     } else {
       pairs_.list().build(p_, skin_, histories);
     }
@@ -364,6 +354,54 @@ void DemSolver::rebuild() {
   }
 }
 
+static_assert(sizeof(KernelGeometry) == 4 * sizeof(double), "the list reads x, y, z of each mirror");
+
+ContactElements DemSolver::list_elements() {
+  ContactElements e;
+  e.size = entities_.size();
+  e.owned = entities_.owned();
+  e.x = entities_.size() ? &entities_.geometry_mirrors()[0].x : nullptr;  // the elements' places now
+  e.stride = sizeof(KernelGeometry) / sizeof(double);
+  e.radius = entities_.element_radius().data();
+  e.key = entities_.element_key().data();
+  e.body = entities_.element_body().data();
+  e.body_mass = p_.mass.data();
+  return e;
+}
+
+bool DemSolver::relisting() const {
+  return settings_.relist && shaped() && !plane_mode() && walls_.meshes().empty() && free_.empty();
+}
+
+double DemSolver::element_travel(std::size_t i, const double* x0, const double* q0) const {
+  const double* x = &p_.x[3 * i];
+  const double* q = &p_.q[4 * i];
+  const double dx = x[0] - x0[0], dy = x[1] - x0[1], dz = x[2] - x0[2];
+  const double c = q[0] * q0[0] + q[1] * q0[1] + q[2] * q0[2] + q[3] * q0[3];
+  return std::sqrt(dx * dx + dy * dy + dz * dz) + 2.0 * arm_[p_.shape[i]] * std::sqrt(std::max(0.0, 1.0 - c * c));
+}
+
+// A stale body far from every cut cannot reach another rank's bodies, nor leave its own sub-box,
+// before it is stale near one: its pairs are listed again here (theory T5a).
+void DemSolver::relist_stale() {
+  auto scope = timers_.scope("neighbor");
+  const std::size_t n = p_.size();
+  stale_.assign(n, 0);
+  bool any = false;
+  for (std::size_t i = 0; i < n; ++i)
+    if (element_travel(i, &x_list_[3 * i], &q_list_[4 * i]) > 0.5 * skin_) stale_[i] = 1, any = true;
+  if (!any) return;
+  pairs_.list().relist(list_elements(), skin_, stale_);
+  for (std::size_t i = 0; i < n; ++i)
+    if (stale_[i]) {
+      for (int d = 0; d < 3; ++d) x_list_[3 * i + d] = p_.x[3 * i + d];
+      for (int d = 0; d < 4; ++d) q_list_[4 * i + d] = p_.q[4 * i + d];
+    }
+  pairs_.start_list();
+  plane_walls_.refind(entities_, walls_, skin_, stale_);
+  fill_coefficients();
+}
+
 bool DemSolver::needs_rebuild() {
   // [0]: squared largest displacement since the list build; [1]: since the moving walls' candidates
   // were last found (sphere bodies; the same as [0] for shaped ones).
@@ -371,18 +409,24 @@ bool DemSolver::needs_rebuild() {
   const bool moving = !walls_.meshes().empty() || !free_.empty();
   {
     auto scope = timers_.scope("neighbor");  // the displacement check is part of the list's cost
-    if (shaped()) {
+    if (relisting()) {
+      // Only a body that has moved skin/2 since the build and is near a cut (within 2 r_max + 2 skin
+      // of a face with a neighbour) calls for a rebuild: the others are relisted where they are.
+      const Vec3 lo = decomp_.sub_lo(), hi = decomp_.sub_hi();
+      const double band = 2 * r_max_ + 2 * skin_;
+      for (std::size_t i = 0; i < p_.owned && max2[0] == 0; ++i) {
+        if (element_travel(i, &x_build_[3 * i], &q_build_[4 * i]) <= 0.5 * skin_) continue;
+        for (int d = 0; d < 3; ++d) {
+          if (decomp_.neighbor(d, 0) != MPI_PROC_NULL && p_.x[3 * i + d] - lo[d] < band) max2[0] = skin_ * skin_;
+          if (decomp_.neighbor(d, 1) != MPI_PROC_NULL && hi[d] - p_.x[3 * i + d] < band) max2[0] = skin_ * skin_;
+        }
+      }
+      max2[1] = max2[0];
+    } else if (shaped()) {
       // A contact sphere at distance c from its body's centre has moved at most
       // |dx| + 2 c sin(theta/2), theta the body's rotation since the build (cos(theta/2) = |q . q0|).
-      const double* x0 = x_build_.data();
-      const double* q0 = q_build_.data();
       for (std::size_t i = 0; i < p_.owned; ++i) {
-        const double* x = &p_.x[3 * i];
-        const double* q = &p_.q[4 * i];
-        const double dx = x[0] - x0[3 * i], dy = x[1] - x0[3 * i + 1], dz = x[2] - x0[3 * i + 2];
-        const double c = q[0] * q0[4 * i] + q[1] * q0[4 * i + 1] + q[2] * q0[4 * i + 2] + q[3] * q0[4 * i + 3];
-        const double d =
-            std::sqrt(dx * dx + dy * dy + dz * dz) + 2.0 * arm_[p_.shape[i]] * std::sqrt(std::max(0.0, 1.0 - c * c));
+        const double d = element_travel(i, &x_build_[3 * i], &q_build_[4 * i]);
         max2[0] = std::max(max2[0], d * d);
       }
       max2[1] = max2[0];
@@ -448,6 +492,7 @@ void DemSolver::update_neighbours() {
     halo_.forward(p_);
     if (shaped()) entities_.place(shapes_, p_.owned, p_.size());
   }
+  if (relisting()) relist_stale();
   if (refresh_moving_) refresh_moving_candidates();
 }
 

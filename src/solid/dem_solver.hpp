@@ -7,7 +7,9 @@
 //                              (dem_integrator.cpp); shaped bodies' elements placed, meshes moved
 //   update_neighbours          [neighbor, migration, ghost_comm]  if some body moved > skin/2 since
 //                              the last build (global check): migrate -> ghosts -> order -> pair
-//                              list and every stage's list; otherwise refresh the ghosts
+//                              list and every stage's list; otherwise refresh the ghosts. With
+//                              relisting (shaped bodies), the global check counts only bodies near
+//                              a cut, and the others' stale pairs are listed again on their rank
 //   compute_forces             [contact_forces] pairs (PairContacts, T1-T4, canonical order)
 //                              [wall_forces] planes and boxes (PlaneWallContacts, T7), mesh walls
 //                              (MeshWallContacts, T14), free spheres (FreeSphereContacts, T17);
@@ -61,6 +63,10 @@ struct DemSettings {
   double steps_per_contact = 30;    // dt = t_contact / steps_per_contact when automatic
   double impact_velocity = 1.0;     // reference speed for the Hertz contact duration
   std::optional<double> skin;       // none: 0.5 r_min
+  // Shaped bodies without moving walls or free spheres: a body that has moved skin/2 since its own
+  // last listing has its pairs listed again alone, and the whole list is rebuilt (with migration and
+  // ghosts) only when such a body comes near a cut (`solid.neighbor_relist`, theory T5a).
+  bool relist = true;
   // Plane (2D) mode (T15): bodies are discs of `plane_thickness` moving in the plane through
   // `plane_position` normal to axis `plane_normal` (-1: 3D), turning about that axis only.
   int plane_normal = -1;
@@ -181,6 +187,7 @@ class DemSolver {
   // Contact histories of touching pairs (this rank's list; pairs with an owned body).
   HistoryMap histories() const;
   std::size_t list_builds() const { return pairs_.list().builds; }
+  std::size_t list_relists() const { return pairs_.list().relists; }
   std::size_t pair_count() const { return pairs_.list().size(); }
   // Collective: completes the load on each mesh wall (MeshWall::force, moment) for reporting;
   // pivot meshes have it every step already.
@@ -278,6 +285,14 @@ class DemSolver {
   std::vector<char> anisotropic_;  // per shape id: principal moments differ (DLM rotation)
   std::int64_t key_stride_ = 1;
   std::vector<double> q_build_;     // owned bodies' orientations at the last build (shaped mode)
+  // Relisting (DemSettings::relist): every local body's pose at its last listing, the stale marks.
+  std::vector<double> x_list_, q_list_;
+  std::vector<char> stale_;
+  bool relisting() const;
+  ContactElements list_elements();
+  void relist_stale();
+  // The most a contact sphere of body i has moved since pose (x0, q0): |dx| + 2 c sin(theta / 2).
+  double element_travel(std::size_t i, const double* x0, const double* q0) const;
   std::vector<double> arm_;         // per shape: the farthest contact-sphere centre from the body's
   std::vector<double> inertia3_;    // owned bodies: principal moments (3 each)
   double dt_ = 0, time_ = 0, skin_ = 0, r_max_ = 0, t_contact_ = 0;

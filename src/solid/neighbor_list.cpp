@@ -49,6 +49,75 @@ void NeighborList::build(const ParticleStore& p, double skin, const HistoryMap& 
   build(e, skin, extra);
 }
 
+int NeighborList::cell_coord(double x, int d) const {
+  return std::clamp(static_cast<int>((x - lo_[d]) * inv_h_), 0, nc_[d] - 1);
+}
+
+void NeighborList::bin(const ContactElements& p, double skin) {
+  const std::size_t n = p.size;
+  double r_min = std::numeric_limits<double>::infinity(), r_max = 0;
+  Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  for (std::size_t i = 0; i < n; ++i) {
+    r_min = std::min(r_min, p.radius[i]);
+    r_max = std::max(r_max, p.radius[i]);
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], p.x[p.stride * i + d]);
+      hi[d] = std::max(hi[d], p.x[p.stride * i + d]);
+    }
+  }
+  r_ref_ = std::min(r_max, 2.0 * r_min);
+  double h = 2.0 * r_ref_ + skin;
+  // Keep the grid at most ~4 cells per body (a body flung far away must not blow up memory).
+  for (;;) {
+    double cells = 1;
+    for (int d = 0; d < 3; ++d) {
+      nc_[d] = std::max(1, static_cast<int>((hi[d] - lo[d]) / h) + 1);
+      cells *= nc_[d];
+    }
+    if (cells <= 4.0 * static_cast<double>(n) + 64) break;
+    h *= 1.5;
+  }
+  lo_ = lo;
+  inv_h_ = 1.0 / h;
+  const std::size_t ncell = static_cast<std::size_t>(nc_[0]) * nc_[1] * nc_[2];
+  cell_start_.assign(ncell + 1, 0);
+  cell_of_.resize(n);
+  cell_items_.resize(n);
+  large_.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (p.radius[i] > r_ref_) {
+      large_.push_back(static_cast<std::int32_t>(i));
+      cell_of_[i] = -1;
+      continue;
+    }
+    const int c = (cell_coord(p.x[p.stride * i + 2], 2) * nc_[1] + cell_coord(p.x[p.stride * i + 1], 1)) * nc_[0] +
+                  cell_coord(p.x[p.stride * i], 0);
+    cell_of_[i] = c;
+    ++cell_start_[c + 1];
+  }
+  for (std::size_t c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
+  std::vector<std::int32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
+  for (std::size_t i = 0; i < n; ++i)
+    if (cell_of_[i] >= 0) cell_items_[fill[cell_of_[i]]++] = static_cast<std::int32_t>(i);
+  moved_.assign(n, 0);
+  moved_list_.clear();
+}
+
+inline void NeighborList::consider(const ContactElements& p, double skin, std::size_t a, std::size_t b) {
+  if (a >= p.owned && b >= p.owned) return;
+  if (p.body && p.body[a] == p.body[b]) return;
+  double r2 = 0;
+  for (int d = 0; d < 3; ++d) {
+    const double dx = p.x[p.stride * a + d] - p.x[p.stride * b + d];
+    r2 += dx * dx;
+  }
+  const double cut = p.radius[a] + p.radius[b] + skin;
+  if (r2 >= cut * cut) return;
+  const bool a_low = p.key[a] < p.key[b];
+  candidates_.push_back({pair_key(p.key[a], p.key[b]), static_cast<std::int32_t>(a_low ? a : b),
+                         static_cast<std::int32_t>(a_low ? b : a)});
+}
+
 void NeighborList::build(const ContactElements& p, double skin, const HistoryMap& extra) {
   ++builds;
   const std::size_t n = p.size;
@@ -57,71 +126,10 @@ void NeighborList::build(const ContactElements& p, double skin, const HistoryMap
   previous_history_.swap(history);
   first.clear(), second.clear(), keys.clear(), history.clear(), meff.clear();
   if (n == 0) return;
-
-  double r_min = std::numeric_limits<double>::infinity(), r_max = 0;
-  Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
-  for (std::size_t i = 0; i < n; ++i) {
-    r_min = std::min(r_min, p.radius[i]);
-    r_max = std::max(r_max, p.radius[i]);
-    for (int d = 0; d < 3; ++d) {
-      lo[d] = std::min(lo[d], p.x[3 * i + d]);
-      hi[d] = std::max(hi[d], p.x[3 * i + d]);
-    }
-  }
-  const double r_ref = std::min(r_max, 2.0 * r_min);
-  double h = 2.0 * r_ref + skin;
-  int nc[3];
-  // Keep the grid at most ~4 cells per body (a body flung far away must not blow up memory).
-  for (;;) {
-    double cells = 1;
-    for (int d = 0; d < 3; ++d) {
-      nc[d] = std::max(1, static_cast<int>((hi[d] - lo[d]) / h) + 1);
-      cells *= nc[d];
-    }
-    if (cells <= 4.0 * static_cast<double>(n) + 64) break;
-    h *= 1.5;
-  }
-  const double inv_h = 1.0 / h;
-  auto cell_coord = [&](double x, int d) { return std::clamp(static_cast<int>((x - lo[d]) * inv_h), 0, nc[d] - 1); };
-  const std::size_t ncell = static_cast<std::size_t>(nc[0]) * nc[1] * nc[2];
-  cell_start_.assign(ncell + 1, 0);
-  cell_of_.resize(n);
-  cell_items_.resize(n);
-  std::vector<std::int32_t> large;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (p.radius[i] > r_ref) {
-      large.push_back(static_cast<std::int32_t>(i));
-      cell_of_[i] = -1;
-      continue;
-    }
-    const int c =
-        (cell_coord(p.x[3 * i + 2], 2) * nc[1] + cell_coord(p.x[3 * i + 1], 1)) * nc[0] + cell_coord(p.x[3 * i], 0);
-    cell_of_[i] = c;
-    ++cell_start_[c + 1];
-  }
-  for (std::size_t c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
-  {
-    std::vector<std::int32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
-    for (std::size_t i = 0; i < n; ++i)
-      if (cell_of_[i] >= 0) cell_items_[fill[cell_of_[i]]++] = static_cast<std::int32_t>(i);
-  }
-
-  const std::size_t owned = p.owned;
+  bin(p, skin);
+  const int* nc = nc_;
+  auto consider = [&](std::size_t a, std::size_t b) { this->consider(p, skin, a, b); };
   const std::int32_t* body = p.body;
-  auto consider = [&](std::size_t a, std::size_t b) {
-    if (a >= owned && b >= owned) return;
-    if (body && body[a] == body[b]) return;
-    double r2 = 0;
-    for (int d = 0; d < 3; ++d) {
-      const double dx = p.x[3 * a + d] - p.x[3 * b + d];
-      r2 += dx * dx;
-    }
-    const double cut = p.radius[a] + p.radius[b] + skin;
-    if (r2 >= cut * cut) return;
-    const bool a_low = p.key[a] < p.key[b];
-    candidates_.push_back({pair_key(p.key[a], p.key[b]), static_cast<std::int32_t>(a_low ? a : b),
-                           static_cast<std::int32_t>(a_low ? b : a)});
-  };
 
   // Small-small: each pair once, from a half stencil over cells (the cell itself, then the 13
   // neighbours ahead of it in (z, y, x) order).
@@ -145,12 +153,12 @@ void NeighborList::build(const ContactElements& p, double skin, const HistoryMap
         }
       }
   // Large-small: each large body scans the cells within its reach.
-  for (const auto li : large) {
-    const double reach = p.radius[li] + r_ref + skin;
+  for (const auto li : large_) {
+    const double reach = p.radius[li] + r_ref_ + skin;
     int c0[3], c1[3];
     for (int d = 0; d < 3; ++d) {
-      c0[d] = cell_coord(p.x[3 * li + d] - reach, d);
-      c1[d] = cell_coord(p.x[3 * li + d] + reach, d);
+      c0[d] = cell_coord(p.x[p.stride * li + d] - reach, d);
+      c1[d] = cell_coord(p.x[p.stride * li + d] + reach, d);
     }
     for (int z = c0[2]; z <= c1[2]; ++z)
       for (int y = c0[1]; y <= c1[1]; ++y)
@@ -160,8 +168,8 @@ void NeighborList::build(const ContactElements& p, double skin, const HistoryMap
         }
   }
   // Large-large: few of them, all pairs.
-  for (std::size_t a = 0; a < large.size(); ++a)
-    for (std::size_t b = a + 1; b < large.size(); ++b) consider(large[a], large[b]);
+  for (std::size_t a = 0; a < large_.size(); ++a)
+    for (std::size_t b = a + 1; b < large_.size(); ++b) consider(large_[a], large_[b]);
 
   sort_by_pair_key(candidates_, sorted_);
   const std::size_t np = candidates_.size();
@@ -185,6 +193,91 @@ void NeighborList::build(const ContactElements& p, double skin, const HistoryMap
         for (int d = 0; d < 3; ++d) history[3 * k + d] = it->second[d];
     }
   }
+}
+
+void NeighborList::relist(const ContactElements& p, double skin, const std::vector<char>& stale) {
+  ++relists;
+  const std::size_t n = p.size;
+  if (n == 0) return;
+  auto body_of = [&](std::size_t i) { return p.body ? static_cast<std::size_t>(p.body[i]) : i; };
+  // The elements listed again since the last bin lie in moved_cells_ at their current place; the
+  // others in the cells, within skin/2 of where they were binned (none of them is stale). When the
+  // moved ones are many, all are binned again.
+  std::size_t stale_elements = 0;
+  for (std::size_t a = 0; a < n; ++a) stale_elements += stale[body_of(a)] != 0;
+  if (moved_.size() != n || 8 * (moved_list_.size() + stale_elements) > n) bin(p, skin);
+  for (std::size_t a = 0; a < n; ++a)
+    if (stale[body_of(a)] && !moved_[a] && cell_of_[a] >= 0) moved_[a] = 1, moved_list_.push_back(static_cast<std::int32_t>(a));
+  auto cell_of = [&](const double* x) {
+    return (cell_coord(x[2], 2) * nc_[1] + cell_coord(x[1], 1)) * nc_[0] + cell_coord(x[0], 0);
+  };
+  moved_cells_.clear();
+  for (const auto e : moved_list_) moved_cells_.emplace_back(cell_of(&p.x[p.stride * static_cast<std::size_t>(e)]), e);
+  std::sort(moved_cells_.begin(), moved_cells_.end());
+  candidates_.clear();
+  // From each element of a stale body, every element within reach; a pair of two stale elements
+  // from the one with the lower key (both searches cover each other: the reaches are symmetric).
+  auto from = [&](std::size_t a, std::size_t b) {
+    if (a == b) return;
+    if (stale[body_of(b)] && p.key[b] < p.key[a]) return;
+    consider(p, skin, a, b);
+  };
+  for (std::size_t a = 0; a < n; ++a) {
+    if (!stale[body_of(a)]) continue;
+    const double* xa = &p.x[p.stride * a];
+    const double reach = p.radius[a] + r_ref_ + skin, binned_reach = reach + 0.5 * skin;
+    int c0[3], c1[3], m0[3], m1[3];
+    for (int d = 0; d < 3; ++d) {
+      c0[d] = cell_coord(xa[d] - binned_reach, d), c1[d] = cell_coord(xa[d] + binned_reach, d);
+      m0[d] = cell_coord(xa[d] - reach, d), m1[d] = cell_coord(xa[d] + reach, d);
+    }
+    for (int z = c0[2]; z <= c1[2]; ++z)
+      for (int y = c0[1]; y <= c1[1]; ++y)
+        for (int x = c0[0]; x <= c1[0]; ++x) {
+          const int cc = (z * nc_[1] + y) * nc_[0] + x;
+          for (int k = cell_start_[cc]; k < cell_start_[cc + 1]; ++k) {
+            const auto b = static_cast<std::size_t>(cell_items_[k]);
+            if (!moved_[b]) from(a, b);
+          }
+        }
+    for (int z = m0[2]; z <= m1[2]; ++z)
+      for (int y = m0[1]; y <= m1[1]; ++y) {
+        const int row = (z * nc_[1] + y) * nc_[0];
+        auto it = std::lower_bound(moved_cells_.begin(), moved_cells_.end(), std::pair<std::int32_t, std::int32_t>{row + m0[0], -1});
+        for (; it != moved_cells_.end() && it->first <= row + m1[0]; ++it) from(a, static_cast<std::size_t>(it->second));
+      }
+    for (const auto l : large_) from(a, static_cast<std::size_t>(l));  // always at their current place
+  }
+  sort_by_pair_key(candidates_, sorted_);
+  // Merge: the kept pairs (no stale body) and the new ones, both sorted by key; a new pair that was
+  // listed before takes its history.
+  merged_first_.clear(), merged_second_.clear(), merged_keys_.clear(), merged_history_.clear(), merged_meff_.clear();
+  auto emit = [&](std::int32_t a, std::int32_t b, PairKey key, const double* h, double m) {
+    merged_first_.push_back(a), merged_second_.push_back(b), merged_keys_.push_back(key);
+    merged_history_.insert(merged_history_.end(), h, h + 3);
+    merged_meff_.push_back(m);
+  };
+  static constexpr double kZero[3] = {0, 0, 0};
+  std::size_t o = 0, c = 0;
+  const std::size_t n_old = keys.size(), n_new = candidates_.size();
+  while (o < n_old || c < n_new) {
+    const bool old_stale = o < n_old && (stale[body_of(first[o])] || stale[body_of(second[o])]);
+    if (o < n_old && !old_stale && (c == n_new || keys[o] < candidates_[c].key)) {
+      emit(first[o], second[o], keys[o], &history[3 * o], meff[o]);
+      ++o;
+    } else if (o < n_old && old_stale && (c == n_new || keys[o] < candidates_[c].key)) {
+      ++o;  // no longer within reach
+    } else {
+      const Candidate& k = candidates_[c++];
+      const double* h = kZero;
+      if (o < n_old && keys[o] == k.key) h = &history[3 * o++];  // listed before (stale: found again)
+      const double ma = p.body_mass[body_of(static_cast<std::size_t>(k.a))];
+      const double mb = p.body_mass[body_of(static_cast<std::size_t>(k.b))];
+      emit(k.a, k.b, k.key, h, ma * mb / (ma + mb));
+    }
+  }
+  first.swap(merged_first_), second.swap(merged_second_), keys.swap(merged_keys_);
+  history.swap(merged_history_), meff.swap(merged_meff_);
 }
 
 void NeighborList::collect(HistoryMap& out) const {

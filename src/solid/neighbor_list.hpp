@@ -26,7 +26,8 @@ namespace tessera {
 // never listed, and keys are element keys (body order * stride + sphere index).
 struct ContactElements {
   std::size_t size = 0, owned = 0;  // elements of owned bodies first
-  const double* x = nullptr;        // 3 per element
+  const double* x = nullptr;        // element i at x[stride * i], 3 coordinates
+  std::size_t stride = 3;
   const double* radius = nullptr;
   const std::int64_t* key = nullptr;   // canonical, unique
   const std::int32_t* body = nullptr;  // local body per element; nullptr: element i is body i
@@ -42,6 +43,13 @@ class NeighborList {
   void build(const ParticleStore& p, double skin, const HistoryMap& extra);
   // Touching pairs' histories (non-zero), for the next build or for migration.
   void collect(HistoryMap& out) const;
+  // Lists again the pairs of the elements whose body is stale (stale[body] != 0; e.body, or element
+  // i is body i): their pairs leave the list and every pair within R_a + R_b + skin of them now is
+  // found from a grid of all elements at their current positions; the other pairs stay, with their
+  // histories, and the list stays sorted. Valid while every body has moved less than skin/2 since
+  // its own last listing: a pair left out was apart by the skin when the later of its two bodies
+  // was listed (theory T5a).
+  void relist(const ContactElements& e, double skin, const std::vector<char>& stale);
 
   std::size_t size() const { return first.size(); }
   std::vector<std::int32_t> first, second;  // local element indices; key[first] < key[second]
@@ -49,7 +57,7 @@ class NeighborList {
   std::vector<double> history;  // 3 per pair (xi of eq. 5)
   std::vector<double> meff;     // m_a m_b / (m_a + m_b), constant while listed
 
-  std::size_t builds = 0;
+  std::size_t builds = 0, relists = 0;
 
  private:
   struct Candidate {
@@ -59,7 +67,25 @@ class NeighborList {
   std::vector<Candidate> candidates_, sorted_;  // sorted_: the radix sort's other buffer
   std::vector<PairKey> previous_keys_;
   std::vector<double> previous_history_;
-  std::vector<std::int32_t> cell_start_, cell_items_, cell_of_;
+  std::vector<std::int32_t> cell_start_, cell_items_, cell_of_, large_;
+  // The grid of the last bin(): cells of width 1 / inv_h_ from lo_, nc_ per direction; elements
+  // larger than r_ref_ are in large_, not in the cells.
+  int nc_[3] = {1, 1, 1};
+  Vec3 lo_;
+  double inv_h_ = 0, r_ref_ = 0;
+  void bin(const ContactElements& e, double skin);
+  int cell_coord(double x, int d) const;
+  // Appends (a, b) to candidates_ when it may be listed: not two ghosts, not one body, within reach.
+  void consider(const ContactElements& e, double skin, std::size_t a, std::size_t b);
+  // Elements listed again since the last bin() (relist): they are not looked up in the cells, where
+  // they lie where they were, but in moved_cells_ (cell, element), sorted, at their current place.
+  std::vector<char> moved_;
+  std::vector<std::int32_t> moved_list_;
+  std::vector<std::pair<std::int32_t, std::int32_t>> moved_cells_;
+  // relist()'s merge buffers
+  std::vector<std::int32_t> merged_first_, merged_second_;
+  std::vector<PairKey> merged_keys_;
+  std::vector<double> merged_history_, merged_meff_;
 };
 
 }  // namespace tessera

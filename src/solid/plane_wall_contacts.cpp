@@ -35,6 +35,39 @@ void PlaneWallContacts::find(const ContactEntities& entities, const Walls& walls
   }
 }
 
+void PlaneWallContacts::refind(const ContactEntities& entities, const Walls& walls, double skin,
+                               const std::vector<char>& stale_body) {
+  std::vector<std::int32_t> old_entity, old_slot;
+  std::vector<PairKey> old_keys;
+  std::vector<double> old_hist;
+  old_entity.swap(entity_), old_slot.swap(slot_), old_keys.swap(keys_), old_hist.swap(hist_);
+  const auto& prims = walls.primitives();
+  std::size_t o = 0;
+  for (std::size_t e = 0; e < entities.owned(); ++e) {
+    if (!stale_body[entities.body(e)]) {
+      for (; o < old_entity.size() && static_cast<std::size_t>(old_entity[o]) == e; ++o) {
+        entity_.push_back(old_entity[o]), slot_.push_back(old_slot[o]), keys_.push_back(old_keys[o]);
+        hist_.insert(hist_.end(), &old_hist[3 * o], &old_hist[3 * o + 3]);
+      }
+      continue;
+    }
+    const Vec3 xe = entities.centre(e);
+    for (std::size_t s = 0; s < prims.size(); ++s) {
+      Vec3 n;
+      if (prims[s].overlap(xe, entities.radius(e) + skin, n) <= 0.0) continue;
+      const PairKey key = wall_key(entities.key(e), static_cast<int>(s));
+      entity_.push_back(static_cast<std::int32_t>(e)), slot_.push_back(static_cast<std::int32_t>(s)), keys_.push_back(key);
+      std::array<double, 3> h{0, 0, 0};
+      while (o < old_entity.size() && (static_cast<std::size_t>(old_entity[o]) < e ||
+                                       (static_cast<std::size_t>(old_entity[o]) == e && old_keys[o] < key)))
+        ++o;
+      if (o < old_entity.size() && old_keys[o] == key) h = {old_hist[3 * o], old_hist[3 * o + 1], old_hist[3 * o + 2]};
+      hist_.insert(hist_.end(), h.begin(), h.end());
+    }
+    while (o < old_entity.size() && static_cast<std::size_t>(old_entity[o]) == e) ++o;
+  }
+}
+
 void PlaneWallContacts::forces(ContactEntities& entities, ParticleStore& bodies, const Walls& walls,
                                ContactLanes& L, const ContactCoefficients* sets, LawKind law, double dt) {
   // Entries in (entity, wall) order; entities read as the kernel mirrors packed this step.

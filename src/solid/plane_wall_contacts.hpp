@@ -26,6 +26,9 @@ class PlaneWallContacts {
   // At a rebuild: the entries within radius + skin of the owned entities, in (entity, slot) order;
   // shaped mode: each with its spring from the previous list, else from `extra`, else zero.
   void find(const ContactEntities& entities, const Walls& walls, double skin, const HistoryMap& extra);
+  // After a relist (shaped mode): the entries of the stale bodies' entities found again, the
+  // others kept as they are.
+  void refind(const ContactEntities& entities, const Walls& walls, double skin, const std::vector<char>& stale_body);
   // The coefficient set of each entry: lookup(material a, material b, m*, R*) -> index.
   template <class Lookup>
   void fill_coefficients(const ContactEntities& entities, const Walls& walls, Lookup&& lookup) {

@@ -83,7 +83,25 @@ TEST(RankIndependence, ShapedGrainsAreBitwiseIdenticalOn1To4Ranks) {
   const BodyStates reference =
       run_scene_on(1, kViolentShapedDeposition,
                    {"run.max_steps=5000", "run.check_interval=5e-5", "domain.process_grid=[1,1,1]"}, dir + "/1");
-  long cross = 0;
+  // The stale bodies' pairs listed again alone (the default, theory T5a) against whole rebuilds at
+  // every skin/2: the same bits, and both ways did what they say.
+  const BodyStates whole =
+      run_scene_on(1, kViolentShapedDeposition,
+                   {"run.max_steps=5000", "run.check_interval=5e-5", "domain.process_grid=[1,1,1]",
+                    "solid.neighbor_relist=false"},
+                   dir + "/1whole");
+  auto lists = [](const std::string& run) {
+    std::ifstream file(run + "/summary.json");
+    const auto s = nlohmann::json::parse(file);
+    return std::pair<long, long>{s["neighbor_list_builds"].get<long>(), s["neighbor_list_relists"].get<long>()};
+  };
+  if (rank == 0) {
+    EXPECT_EQ(count_differences(reference, whole, "whole rebuilds"), 0);
+    EXPECT_GE(lists(dir + "/1").second, 20) << "relists";
+    EXPECT_EQ(lists(dir + "/1whole").second, 0);
+    EXPECT_GT(lists(dir + "/1whole").first, 5 * lists(dir + "/1").first) << "builds";
+  }
+  long cross = 0, relists = 0;
   for (const char* grid : {"[2,1,1]", "[1,1,2]", "[2,2,1]", "[4,1,1]"}) {
     const int ranks = std::string(grid) == "[2,2,1]" || std::string(grid) == "[4,1,1]" ? 4 : 2;
     const BodyStates got =
@@ -95,10 +113,12 @@ TEST(RankIndependence, ShapedGrainsAreBitwiseIdenticalOn1To4Ranks) {
       EXPECT_EQ(count_differences(reference, got, grid), 0) << ranks << " ranks, grid " << grid;
       // The lattice filled the 12 mm box; the fallen bed is 5.3 mm high (measured).
       cross += expect_split_and_moved(dir + "/" + std::to_string(ranks) + grid, ranks, 8e-3);
+      relists += lists(dir + "/" + std::to_string(ranks) + grid).second;
     }
   }
   if (rank == 0) {
     EXPECT_GE(cross, 100);  // contacts between bodies of different ranks were evaluated
+    EXPECT_GT(relists, 0);  // and bodies away from the cuts were relisted on their ranks
   }
 }
 
