@@ -410,17 +410,23 @@ bool DemSolver::needs_rebuild() {
   {
     auto scope = timers_.scope("neighbor");  // the displacement check is part of the list's cost
     if (relisting()) {
-      // Only a body that has moved skin/2 since the build and is near a cut (within 2 r_max + 2 skin
-      // of a face with a neighbour) calls for a rebuild: the others are relisted where they are.
+      // The ghosts and the owners stay right while no body has left its sub-domain by skin/2 and
+      // none has come within r + r_max + skin/2 of a face it was not copied across (Halo's rule at
+      // the build): the stale ones are relisted where they are (theory T5a).
       const Vec3 lo = decomp_.sub_lo(), hi = decomp_.sub_hi();
-      const double band = 2 * r_max_ + 2 * skin_;
-      for (std::size_t i = 0; i < p_.owned && max2[0] == 0; ++i) {
-        if (element_travel(i, &x_build_[3 * i], &q_build_[4 * i]) <= 0.5 * skin_) continue;
+      const double half = 0.5 * skin_;
+      for (std::size_t i = 0; i < p_.owned && max2[0] == 0; ++i)
         for (int d = 0; d < 3; ++d) {
-          if (decomp_.neighbor(d, 0) != MPI_PROC_NULL && p_.x[3 * i + d] - lo[d] < band) max2[0] = skin_ * skin_;
-          if (decomp_.neighbor(d, 1) != MPI_PROC_NULL && hi[d] - p_.x[3 * i + d] < band) max2[0] = skin_ * skin_;
+          if (decomp_.dims()[d] == 1) continue;
+          const double x = p_.x[3 * i + d], x0 = x_build_[3 * i + d];
+          const double copied = p_.radius[i] + r_max_ + skin_, near = copied - half;
+          if (decomp_.neighbor(d, 0) != MPI_PROC_NULL &&
+              (x < lo[d] - half || (!(x0 < lo[d] + copied) && x < lo[d] + near)))
+            max2[0] = skin_ * skin_;
+          if (decomp_.neighbor(d, 1) != MPI_PROC_NULL &&
+              (x > hi[d] + half || (!(x0 >= hi[d] - copied) && x >= hi[d] - near)))
+            max2[0] = skin_ * skin_;
         }
-      }
       max2[1] = max2[0];
     } else if (shaped()) {
       // A contact sphere at distance c from its body's centre has moved at most
