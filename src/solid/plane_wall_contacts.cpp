@@ -5,11 +5,10 @@ namespace tessera {
 
 void PlaneWallContacts::find(const ContactEntities& entities, const Walls& walls, double skin,
                              const HistoryMap& extra) {
-  std::vector<PairKey> old_keys;
-  std::vector<double> old_hist;
-  old_keys.swap(keys_);
-  old_hist.swap(hist_);
-  entity_.clear(), slot_.clear();
+  old_keys_.swap(keys_), old_hist_.swap(hist_);
+  keys_.clear(), hist_.clear(), entity_.clear(), slot_.clear();
+  const auto& old_keys = old_keys_;
+  const auto& old_hist = old_hist_;
   const auto& prims = walls.primitives();
   const bool sh = entities.shaped();
   std::size_t old = 0;
@@ -37,10 +36,12 @@ void PlaneWallContacts::find(const ContactEntities& entities, const Walls& walls
 
 void PlaneWallContacts::refind(const ContactEntities& entities, const Walls& walls, double skin,
                                const std::vector<char>& stale_body) {
-  std::vector<std::int32_t> old_entity, old_slot;
-  std::vector<PairKey> old_keys;
-  std::vector<double> old_hist;
-  old_entity.swap(entity_), old_slot.swap(slot_), old_keys.swap(keys_), old_hist.swap(hist_);
+  old_entity_.swap(entity_), old_slot_.swap(slot_), old_keys_.swap(keys_), old_hist_.swap(hist_);
+  entity_.clear(), slot_.clear(), keys_.clear(), hist_.clear();
+  const auto& old_entity = old_entity_;
+  const auto& old_slot = old_slot_;
+  const auto& old_keys = old_keys_;
+  const auto& old_hist = old_hist_;
   const auto& prims = walls.primitives();
   std::size_t o = 0;
   for (std::size_t e = 0; e < entities.owned(); ++e) {

@@ -62,6 +62,10 @@ class PlaneWallContacts {
   std::vector<std::int32_t> entity_, slot_, coefficient_;
   std::vector<PairKey> keys_;      // shaped mode: per entry
   std::vector<double> hist_;       // shaped mode: 3 per entry
+  // The previous entries while find()/refind() make the new ones (kept: no allocation per call).
+  std::vector<std::int32_t> old_entity_, old_slot_;
+  std::vector<PairKey> old_keys_;
+  std::vector<double> old_hist_;
   std::vector<double> entry_force_;  // 3 per entry: the body's force on the wall
   bool track_impulse_ = false;
   std::array<ExactSum, 3> impulse_;
