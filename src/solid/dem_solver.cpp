@@ -387,11 +387,14 @@ void DemSolver::relist_stale() {
   auto scope = timers_.scope("neighbor");
   const std::size_t n = p_.size();
   stale_.assign(n, 0);
+  travel_.resize(n);
   bool any = false;
-  for (std::size_t i = 0; i < n; ++i)
-    if (element_travel(i, &x_list_[3 * i], &q_list_[4 * i]) > 0.5 * skin_) stale_[i] = 1, any = true;
+  for (std::size_t i = 0; i < n; ++i) {
+    travel_[i] = element_travel(i, &x_list_[3 * i], &q_list_[4 * i]);
+    if (travel_[i] > 0.5 * skin_) stale_[i] = 1, any = true;
+  }
   if (!any) return;
-  pairs_.list().relist(list_elements(), skin_, stale_);
+  pairs_.list().relist(list_elements(), skin_, stale_, travel_);
   for (std::size_t i = 0; i < n; ++i)
     if (stale_[i]) {
       for (int d = 0; d < 3; ++d) x_list_[3 * i + d] = p_.x[3 * i + d];

@@ -288,6 +288,7 @@ class DemSolver {
   // Relisting (DemSettings::relist): every local body's pose at its last listing, the stale marks.
   std::vector<double> x_list_, q_list_;
   std::vector<char> stale_;
+  std::vector<double> travel_;  // relist_stale(): each body's travel since its own listing (T13's bound)
   bool relisting() const;
   ContactElements list_elements();
   void relist_stale();

@@ -103,7 +103,7 @@ void NeighborList::bin(const ContactElements& p, double skin) {
   moved_list_.clear();
 }
 
-inline void NeighborList::consider(const ContactElements& p, double skin, std::size_t a, std::size_t b) {
+inline void NeighborList::consider(const ContactElements& p, double skin, std::size_t a, std::size_t b, double extra) {
   if (a >= p.owned && b >= p.owned) return;
   if (p.body && p.body[a] == p.body[b]) return;
   double r2 = 0;
@@ -111,7 +111,7 @@ inline void NeighborList::consider(const ContactElements& p, double skin, std::s
     const double dx = p.x[p.stride * a + d] - p.x[p.stride * b + d];
     r2 += dx * dx;
   }
-  const double cut = p.radius[a] + p.radius[b] + skin;
+  const double cut = p.radius[a] + p.radius[b] + skin + extra;
   if (r2 >= cut * cut) return;
   const bool a_low = p.key[a] < p.key[b];
   candidates_.push_back({pair_key(p.key[a], p.key[b]), static_cast<std::int32_t>(a_low ? a : b),
@@ -195,19 +195,28 @@ void NeighborList::build(const ContactElements& p, double skin, const HistoryMap
   }
 }
 
-void NeighborList::relist(const ContactElements& p, double skin, const std::vector<char>& stale) {
+void NeighborList::relist(const ContactElements& p, double skin, const std::vector<char>& stale,
+                          const std::vector<double>& travel) {
   ++relists;
   const std::size_t n = p.size;
   if (n == 0) return;
-  auto body_of = [&](std::size_t i) { return p.body ? static_cast<std::size_t>(p.body[i]) : i; };
+  // Per element: stale or not, and how far a fresh element's body has gone since its own listing.
+  stale_el_.resize(n);
+  std::size_t stale_elements = 0;
+  double fresh_travel = 0;
+  for (std::size_t a = 0; a < n; ++a) {
+    const std::size_t body = p.body ? static_cast<std::size_t>(p.body[a]) : a;
+    stale_el_[a] = stale[body];
+    stale_elements += stale_el_[a] != 0;
+    if (!stale_el_[a]) fresh_travel = std::max(fresh_travel, travel[body]);
+  }
+  auto travel_of = [&](std::size_t b) { return travel[p.body ? static_cast<std::size_t>(p.body[b]) : b]; };
   // The elements listed again since the last bin lie in moved_cells_ at their current place; the
   // others in the cells, within skin/2 of where they were binned (none of them is stale). When the
   // moved ones are many, all are binned again.
-  std::size_t stale_elements = 0;
-  for (std::size_t a = 0; a < n; ++a) stale_elements += stale[body_of(a)] != 0;
   if (moved_.size() != n || 8 * (moved_list_.size() + stale_elements) > n) bin(p, skin);
   for (std::size_t a = 0; a < n; ++a)
-    if (stale[body_of(a)] && !moved_[a] && cell_of_[a] >= 0) moved_[a] = 1, moved_list_.push_back(static_cast<std::int32_t>(a));
+    if (stale_el_[a] && !moved_[a] && cell_of_[a] >= 0) moved_[a] = 1, moved_list_.push_back(static_cast<std::int32_t>(a));
   auto cell_of = [&](const double* x) {
     return (cell_coord(x[2], 2) * nc_[1] + cell_coord(x[1], 1)) * nc_[0] + cell_coord(x[0], 0);
   };
@@ -215,17 +224,23 @@ void NeighborList::relist(const ContactElements& p, double skin, const std::vect
   for (const auto e : moved_list_) moved_cells_.emplace_back(cell_of(&p.x[p.stride * static_cast<std::size_t>(e)]), e);
   std::sort(moved_cells_.begin(), moved_cells_.end());
   candidates_.clear();
-  // From each element of a stale body, every element within reach; a pair of two stale elements
-  // from the one with the lower key (both searches cover each other: the reaches are symmetric).
+  // From each element of a stale body, every element within reach: R_a + R_b + skin, plus, for an
+  // element not listed again now, how far its body has gone since its own listing (it may come back
+  // that far towards a; theory T5a). A pair of two stale elements from the one with the lower key
+  // (both searches cover each other: the reaches are symmetric).
   auto from = [&](std::size_t a, std::size_t b) {
     if (a == b) return;
-    if (stale[body_of(b)] && p.key[b] < p.key[a]) return;
-    consider(p, skin, a, b);
+    if (stale_el_[b]) {
+      if (p.key[b] < p.key[a]) return;
+      consider(p, skin, a, b, 0.0);
+    } else {
+      consider(p, skin, a, b, travel_of(b));
+    }
   };
   for (std::size_t a = 0; a < n; ++a) {
-    if (!stale[body_of(a)]) continue;
+    if (!stale_el_[a]) continue;
     const double* xa = &p.x[p.stride * a];
-    const double reach = p.radius[a] + r_ref_ + skin, binned_reach = reach + 0.5 * skin;
+    const double reach = p.radius[a] + r_ref_ + skin + fresh_travel, binned_reach = reach + 0.5 * skin;
     int c0[3], c1[3], m0[3], m1[3];
     for (int d = 0; d < 3; ++d) {
       c0[d] = cell_coord(xa[d] - binned_reach, d), c1[d] = cell_coord(xa[d] + binned_reach, d);
@@ -249,35 +264,51 @@ void NeighborList::relist(const ContactElements& p, double skin, const std::vect
     for (const auto l : large_) from(a, static_cast<std::size_t>(l));  // always at their current place
   }
   sort_by_pair_key(candidates_, sorted_);
-  // Merge: the kept pairs (no stale body) and the new ones, both sorted by key; a new pair that was
-  // listed before takes its history.
-  merged_first_.clear(), merged_second_.clear(), merged_keys_.clear(), merged_history_.clear(), merged_meff_.clear();
-  auto emit = [&](std::int32_t a, std::int32_t b, PairKey key, const double* h, double m) {
-    merged_first_.push_back(a), merged_second_.push_back(b), merged_keys_.push_back(key);
-    merged_history_.insert(merged_history_.end(), h, h + 3);
-    merged_meff_.push_back(m);
-  };
-  static constexpr double kZero[3] = {0, 0, 0};
-  std::size_t o = 0, c = 0;
-  const std::size_t n_old = keys.size(), n_new = candidates_.size();
+  merge_relisted(p);
+}
+
+// The kept pairs (no stale element) and the new ones, both sorted by key, into one sorted list; a
+// new pair that was listed before takes its history. Runs of kept pairs are copied whole.
+void NeighborList::merge_relisted(const ContactElements& p) {
+  const std::size_t n_old = keys.size(), n_new = candidates_.size(), cap = n_old + n_new;
+  if (merged_keys_.size() < cap) {
+    merged_first_.resize(cap), merged_second_.resize(cap), merged_keys_.resize(cap);
+    merged_history_.resize(3 * cap), merged_meff_.resize(cap);
+  }
+  auto old_stale = [&](std::size_t o) { return stale_el_[static_cast<std::size_t>(first[o])] | stale_el_[static_cast<std::size_t>(second[o])]; };
+  auto body_mass = [&](std::int32_t e) { return p.body_mass[p.body ? static_cast<std::size_t>(p.body[e]) : static_cast<std::size_t>(e)]; };
+  std::size_t o = 0, c = 0, w = 0;
   while (o < n_old || c < n_new) {
-    const bool old_stale = o < n_old && (stale[body_of(first[o])] || stale[body_of(second[o])]);
-    if (o < n_old && !old_stale && (c == n_new || keys[o] < candidates_[c].key)) {
-      emit(first[o], second[o], keys[o], &history[3 * o], meff[o]);
-      ++o;
-    } else if (o < n_old && old_stale && (c == n_new || keys[o] < candidates_[c].key)) {
-      ++o;  // no longer within reach
-    } else {
-      const Candidate& k = candidates_[c++];
-      const double* h = kZero;
-      if (o < n_old && keys[o] == k.key) h = &history[3 * o++];  // listed before (stale: found again)
-      const double ma = p.body_mass[body_of(static_cast<std::size_t>(k.a))];
-      const double mb = p.body_mass[body_of(static_cast<std::size_t>(k.b))];
-      emit(k.a, k.b, k.key, h, ma * mb / (ma + mb));
+    const PairKey next_new = c < n_new ? candidates_[c].key : std::numeric_limits<PairKey>::max();
+    std::size_t run = o;
+    while (run < n_old && keys[run] < next_new && !old_stale(run)) ++run;
+    if (run > o) {
+      const std::size_t len = run - o;
+      std::copy_n(&first[o], len, &merged_first_[w]), std::copy_n(&second[o], len, &merged_second_[w]);
+      std::copy_n(&keys[o], len, &merged_keys_[w]), std::copy_n(&meff[o], len, &merged_meff_[w]);
+      std::copy_n(&history[3 * o], 3 * len, &merged_history_[3 * w]);
+      w += len, o = run;
     }
+    if (o < n_old && keys[o] < next_new) {
+      ++o;  // a stale element's pair, no longer within reach
+      continue;
+    }
+    if (c == n_new) break;
+    const Candidate& k = candidates_[c++];
+    double* h = &merged_history_[3 * w];
+    if (o < n_old && keys[o] == k.key) {  // listed before (stale: found again)
+      std::copy_n(&history[3 * o], 3, h);
+      ++o;
+    } else {
+      h[0] = h[1] = h[2] = 0.0;
+    }
+    const double ma = body_mass(k.a), mb = body_mass(k.b);
+    merged_first_[w] = k.a, merged_second_[w] = k.b, merged_keys_[w] = k.key, merged_meff_[w] = ma * mb / (ma + mb);
+    ++w;
   }
   first.swap(merged_first_), second.swap(merged_second_), keys.swap(merged_keys_);
   history.swap(merged_history_), meff.swap(merged_meff_);
+  first.resize(w), second.resize(w), keys.resize(w), history.resize(3 * w), meff.resize(w);
 }
 
 void NeighborList::collect(HistoryMap& out) const {

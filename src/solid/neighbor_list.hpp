@@ -45,11 +45,11 @@ class NeighborList {
   void collect(HistoryMap& out) const;
   // Lists again the pairs of the elements whose body is stale (stale[body] != 0; e.body, or element
   // i is body i): their pairs leave the list and every pair within R_a + R_b + skin of them now is
-  // found from a grid of all elements at their current positions; the other pairs stay, with their
-  // histories, and the list stays sorted. Valid while every body has moved less than skin/2 since
-  // its own last listing: a pair left out was apart by the skin when the later of its two bodies
-  // was listed (theory T5a).
-  void relist(const ContactElements& e, double skin, const std::vector<char>& stale);
+  // found from a grid of all elements at their current positions, the reach grown, for a partner
+  // not listed again, by travel[its body] (how far it has gone since its own listing, at most
+  // skin/2); the other pairs stay, with their histories, and the list stays sorted. Valid while
+  // every body has moved less than skin/2 since its own last listing (theory T5a).
+  void relist(const ContactElements& e, double skin, const std::vector<char>& stale, const std::vector<double>& travel);
 
   std::size_t size() const { return first.size(); }
   std::vector<std::int32_t> first, second;  // local element indices; key[first] < key[second]
@@ -76,12 +76,14 @@ class NeighborList {
   void bin(const ContactElements& e, double skin);
   int cell_coord(double x, int d) const;
   // Appends (a, b) to candidates_ when it may be listed: not two ghosts, not one body, within reach.
-  void consider(const ContactElements& e, double skin, std::size_t a, std::size_t b);
+  void consider(const ContactElements& e, double skin, std::size_t a, std::size_t b, double extra = 0.0);
+  void merge_relisted(const ContactElements& e);
   // Elements listed again since the last bin() (relist): they are not looked up in the cells, where
   // they lie where they were, but in moved_cells_ (cell, element), sorted, at their current place.
   std::vector<char> moved_;
   std::vector<std::int32_t> moved_list_;
   std::vector<std::pair<std::int32_t, std::int32_t>> moved_cells_;
+  std::vector<char> stale_el_;  // relist(): per element, its body's stale flag
   // relist()'s merge buffers
   std::vector<std::int32_t> merged_first_, merged_second_;
   std::vector<PairKey> merged_keys_;

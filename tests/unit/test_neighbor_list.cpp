@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <set>
+#include <string>
+#include <vector>
 
 #include "solid/neighbor_list.hpp"
 
@@ -76,6 +78,119 @@ TEST(NeighborList, CarriesHistoriesOfListedPairs) {
   HistoryMap back;
   list.collect(back);
   EXPECT_EQ(back.size(), 1u);  // (2, 3) is not listed: it cannot touch, its history is gone
+}
+
+ContactElements elements_of(const ParticleStore& p) {
+  ContactElements e;
+  e.size = p.size();
+  e.owned = p.owned;
+  e.x = p.x.data();
+  e.radius = p.radius.data();
+  e.key = p.order.data();
+  e.body_mass = p.mass.data();
+  return e;
+}
+
+// Relisting (theory T5a) keeps every pair that touches listed, whatever the order of the bodies'
+// listings: each body is listed again alone when it has gone skin/2 from where it was last listed.
+struct Relister {
+  ParticleStore& p;
+  double skin;
+  NeighborList list;
+  std::vector<double> listed_at;  // each body's place at its last listing
+  void build() {
+    list.build(p, skin, {});
+    listed_at = p.x;
+  }
+  void step() {  // after the bodies moved: relist the stale ones
+    std::vector<char> stale(p.size(), 0);
+    std::vector<double> travel(p.size(), 0.0);
+    bool any = false;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      travel[i] = std::sqrt(norm2(p.pos(i) - Vec3::load(&listed_at[3 * i])));
+      if (travel[i] > 0.5 * skin) stale[i] = 1, any = true;
+    }
+    if (!any) return;
+    list.relist(elements_of(p), skin, stale, travel);
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (stale[i]) std::copy_n(&p.x[3 * i], 3, &listed_at[3 * i]);
+  }
+  // Listed, once, in canonical order: every pair with an owned body closer than R_a + R_b + skin
+  // less the two bodies' travels since their own listings (so every touching pair, until one of the
+  // two is stale). A pair left out was at least R_a + R_b + skin + (the other's travel then) apart
+  // at the later of the two listings (theory T5a).
+  void expect_complete(const std::string& when) const {
+    std::set<PairKey> listed(list.keys.begin(), list.keys.end());
+    ASSERT_EQ(listed.size(), list.size()) << when << ": a pair listed twice";
+    ASSERT_TRUE(std::is_sorted(list.keys.begin(), list.keys.end())) << when;
+    std::vector<double> travel(p.size());
+    for (std::size_t i = 0; i < p.size(); ++i) travel[i] = std::sqrt(norm2(p.pos(i) - Vec3::load(&listed_at[3 * i])));
+    for (std::size_t a = 0; a < p.size(); ++a)
+      for (std::size_t b = a + 1; b < p.size(); ++b) {
+        if (a >= p.owned && b >= p.owned) continue;
+        const double touch = p.radius[a] + p.radius[b] + skin - travel[a] - travel[b];
+        if (norm2(p.pos(a) - p.pos(b)) < touch * touch) {
+          ASSERT_TRUE(listed.count(pair_key(p.order[a], p.order[b]))) << when << ": bodies " << a << ", " << b << " within reach, not listed";
+        }
+      }
+  }
+};
+
+// The case the partner's own travel is for: b moves skin/2 away before a is listed again at just
+// over R_a + R_b + skin from it, then both come back (a by less than skin/2 since its listing, b by
+// less than skin/2 from its own listing place: skin in all since a's listing). They overlap, and the
+// pair must have been listed at a's relisting.
+TEST(NeighborList, RelistReachesAPartnerThatMayComeBack) {
+  const double r = 1.0, s = 0.2;
+  ParticleStore p;
+  p.push_back(1, 0, r, 1, 1, {0, 0, 0}, {}, {});
+  p.push_back(2, 0, r, 1, 1, {2.3, 0, 0}, {}, {});
+  p.owned = 2;
+  p.order = {1, 2};
+  Relister rl{p, s, {}, {}};
+  rl.build();
+  EXPECT_EQ(rl.list.size(), 0u);  // 2.3 apart: beyond 2 r + s
+  p.x[3] = 2.399;                  // b goes away, 0.099 < s/2: not stale
+  rl.step();
+  p.x[0] = 0.15;  // a goes 0.15 > s/2 towards b: stale, listed again 2.249 from b (> 2 r + s)
+  rl.step();
+  EXPECT_EQ(rl.list.relists, 1u);
+  p.x[0] = 0.249, p.x[3] = 2.201;  // both back, each 0.099 from its own listing place: 1.952 apart
+  rl.step();
+  EXPECT_EQ(rl.list.relists, 1u);
+  rl.expect_complete("after both came back");
+}
+
+// Many grains (owned and ghosts, one large body) jiggling at random, each listed again alone when
+// stale: at every step every touching pair is listed, and a listed pair keeps its history.
+TEST(NeighborList, RelistedListStaysCompleteUnderRandomMotion) {
+  ParticleStore p = make_bodies(400, 100, 3e-3);
+  const double skin = 1.5e-4;
+  std::uint64_t z = 777;
+  auto rnd = [&z] {
+    z = z * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(z >> 11) * 0x1.0p-53 - 0.5;
+  };
+  // Packed closer: shrink the cloud towards its centre so that many pairs touch.
+  for (std::size_t i = 0; i < p.size(); ++i)
+    for (int d = 0; d < 3; ++d) p.x[3 * i + d] = 0.01 + 0.45 * (p.x[3 * i + d] - 0.01);
+  Relister rl{p, skin, {}, {}};
+  rl.build();
+  for (std::size_t k = 0; k < rl.list.size(); ++k) rl.list.history[3 * k] = static_cast<double>(rl.list.keys[k] % 1000);
+  std::size_t relists = 0;
+  for (int step = 0; step < 200; ++step) {
+    // Each body drifts with its own velocity that turns now and then, so bodies go out and come back.
+    for (std::size_t i = 0; i < p.size(); ++i)
+      for (int d = 0; d < 3; ++d) p.x[3 * i + d] += 0.03 * skin * std::sin(0.05 * step * (1 + i % 7) + d + i) + 0.02 * skin * rnd();
+    rl.step();
+    relists = rl.list.relists;
+    rl.expect_complete("step " + std::to_string(step));
+    for (std::size_t k = 0; k < rl.list.size(); ++k)
+      if (rl.list.history[3 * k] != 0.0) {
+        ASSERT_EQ(rl.list.history[3 * k], static_cast<double>(rl.list.keys[k] % 1000));
+      }
+  }
+  EXPECT_GT(relists, 50u);
 }
 
 }  // namespace
