@@ -391,9 +391,12 @@ void DemSolver::relist_stale() {
   bool any = false;
   for (std::size_t i = 0; i < n; ++i) {
     travel_[i] = element_travel(i, &x_list_[3 * i], &q_list_[4 * i]);
-    if (travel_[i] > 0.5 * skin_) stale_[i] = 1, any = true;
+    any = any || travel_[i] > 0.5 * skin_;
   }
   if (!any) return;
+  // Once one body is stale, every body past half of its allowance is listed with it: one merge of
+  // the list for all that move, not one per sub-step (T5a).
+  for (std::size_t i = 0; i < n; ++i) stale_[i] = travel_[i] > 0.25 * skin_;
   pairs_.list().relist(list_elements(), skin_, stale_, travel_);
   for (std::size_t i = 0; i < n; ++i)
     if (stale_[i]) {
