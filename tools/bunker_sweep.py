@@ -235,7 +235,9 @@ def points(rows):
         p = {"bounce_deg": b, "loft_deg": l, "depth_mm": d, "shots": len(shots),
              "wall_s": statistics.median(r["wall_s"] for r in shots),
              "ball_hit_wall": sum(1 for r in shots if r["ball_hit_wall"]),
-             "shot0": min(shots, key=lambda r: r["member"]), "members": shots}
+             "members": shots,
+             # the first shot whose ball.csv is here (a --prior shot has only its row)
+             "traced": min((r for r in shots if r["dir"]), key=lambda r: r["member"], default=None)}
         for k in QUANTITIES:
             v = [r[k] for r in shots]
             sd = statistics.stdev(v) if len(v) > 1 else 0.0
@@ -290,14 +292,14 @@ def report(args):
                 v.append((float(row["ball_vx"]) ** 2 + float(row["ball_vz"]) ** 2) ** 0.5)
         return t, v
     # Fig. 7: the ball's speed against time in the reference shots, every ensemble member (thin).
-    ref = [p for p in pts if p["depth_mm"] == 0 and p["bounce_deg"] == args.bounce and p["shot0"]["dir"]]
+    ref = [p for p in pts if p["depth_mm"] == 0 and p["bounce_deg"] == args.bounce and p["traced"]]
     if ref:
         fig, ax = plt.subplots(figsize=(5.5, 3.8))
         for p in sorted(ref, key=lambda p: p["loft_deg"]):
-            line, = ax.plot(*trace(p["shot0"]), label="loft %g deg%s" % (
+            line, = ax.plot(*trace(p["traced"]), label="loft %g deg%s" % (
                 p["loft_deg"], " (%d shots)" % p["shots"] if p["shots"] > 1 else ""))
             for r in p["members"]:
-                if r is not p["shot0"] and r["dir"]:
+                if r is not p["traced"] and r["dir"]:
                     ax.plot(*trace(r), color=line.get_color(), lw=0.5, alpha=0.5)
             ax.errorbar([1e3 * p["release_time_s"]], [p["release_speed_mps"]],
                         xerr=[2e3 * p["release_time_s_stderr"]], yerr=[2 * p["release_speed_mps_stderr"]],
