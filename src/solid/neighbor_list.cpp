@@ -38,7 +38,7 @@ void sort_by_pair_key(std::vector<Item>& items, std::vector<Item>& buffer) {
 
 }  // namespace
 
-void NeighborList::build(const ParticleStore& p, double skin, const HistoryMap& extra) {
+ContactElements elements_of(const ParticleStore& p) {
   ContactElements e;
   e.size = p.size();
   e.owned = p.owned;
@@ -46,8 +46,10 @@ void NeighborList::build(const ParticleStore& p, double skin, const HistoryMap& 
   e.radius = p.radius.data();
   e.key = p.order.data();
   e.body_mass = p.mass.data();
-  build(e, skin, extra);
+  return e;
 }
+
+void NeighborList::build(const ParticleStore& p, double skin, const HistoryMap& extra) { build(elements_of(p), skin, extra); }
 
 int NeighborList::cell_coord(double x, int d) const {
   return std::clamp(static_cast<int>((x - lo_[d]) * inv_h_), 0, nc_[d] - 1);

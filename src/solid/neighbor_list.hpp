@@ -34,6 +34,9 @@ struct ContactElements {
   const double* body_mass = nullptr;
 };
 
+// A store's bodies as elements (each body one element).
+ContactElements elements_of(const ParticleStore& p);
+
 class NeighborList {
  public:
   void build(const ContactElements& e, double skin, const HistoryMap& extra);

@@ -80,17 +80,6 @@ TEST(NeighborList, CarriesHistoriesOfListedPairs) {
   EXPECT_EQ(back.size(), 1u);  // (2, 3) is not listed: it cannot touch, its history is gone
 }
 
-ContactElements elements_of(const ParticleStore& p) {
-  ContactElements e;
-  e.size = p.size();
-  e.owned = p.owned;
-  e.x = p.x.data();
-  e.radius = p.radius.data();
-  e.key = p.order.data();
-  e.body_mass = p.mass.data();
-  return e;
-}
-
 // Relisting (theory T5a) keeps every pair that touches listed, whatever the order of the bodies'
 // listings: each body is listed again alone when it has gone skin/2 from where it was last listed.
 struct Relister {
