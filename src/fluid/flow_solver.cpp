@@ -63,8 +63,10 @@ void FlowSolver::make_fields() {
   rhs_ = g.make_field();
   flux_f_ = g.make_field();
   flux_m_ = g.make_field();
+  sweep_f_ = g.make_field();
   for (int d = 0; d < 3; ++d) {
     u_[d] = g.make_field();
+    sweep_u_[d] = g.make_field();
     uf_[d] = g.make_field();
     work_[d] = g.make_field();
     face_accel_[d] = g.make_field();
@@ -318,7 +320,10 @@ void FlowSolver::sweep(int d, double dt, bool last) {
       flux_q_[q][c] = flux_m * face;
     }
   });
-  bound_momentum_fluxes(d, dt, last);
+  // Every cell's new state from these fluxes, into sweep_u_ and sweep_f_ (the old ones stay for the
+  // bound's ranges and upwind values), and F7's first round: the cells that would overshoot.
+  auto& marked = bound_marked_;
+  marked.clear();
   for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)}, [&](int i, int j, int k) {
     const std::size_t c = g.at(i, j, k);
     // The sweeps' dilatation terms add up to dt div(u_f), zero up to the Poisson tolerance. The last
@@ -330,9 +335,17 @@ void FlowSolver::sweep(int d, double dt, bool last) {
     else
       dilatation_[c] += div;
     const SweepUpdate up = sweep_update(c, st, div);
-    for (int q = 0; q < 3; ++q) u_[q][c] = up.momentum[q] / up.density;  // (F7)
-    f_[c] = up.fraction;
+    store_update(c, up);
+    if (overshoots(c, st, up)) marked.push_back({i, j, k});
   });
+  // The later rounds; the cells next to a face that took the upwind value are updated again.
+  bound_momentum_fluxes(d, dt, last);
+  for (const auto& n : bound_redo_) {
+    const std::size_t c = g.at(n[0], n[1], n[2]);
+    store_update(c, sweep_update(c, st, last ? -dilatation_[c] : (uf[c + st] - uf[c]) * dt / h));
+  }
+  for (int q = 0; q < 3; ++q) std::swap(u_[q], sweep_u_[q]);
+  std::swap(f_, sweep_f_);
   g.exchange({&f_, &u_[0], &u_[1], &u_[2]});
   fill_fraction_ghosts(f_);
   fill_velocity_ghosts(u_);
@@ -353,28 +366,34 @@ FlowSolver::SweepUpdate FlowSolver::sweep_update(std::size_t c, std::ptrdiff_t s
   return up;
 }
 
+void FlowSolver::store_update(std::size_t c, const SweepUpdate& up) {
+  for (int q = 0; q < 3; ++q) sweep_u_[q][c] = up.momentum[q] / up.density;  // (F7)
+  sweep_f_[c] = up.fraction;
+}
+
+bool FlowSolver::overshoots(std::size_t c, std::ptrdiff_t st, const SweepUpdate& up) const {
+  // F7's bound: the new velocity (any component) outside the range of the cell's own and its two
+  // neighbours' along the sweep, widened by the slack.
+  for (int q = 0; q < 3; ++q) {
+    const auto& u = u_[q];
+    const double lo = std::min({u[c - st], u[c], u[c + st]}), hi = std::max({u[c - st], u[c], u[c + st]});
+    const double slack = kMomentumBoundSlack * (std::abs(lo) + std::abs(hi)) + 1e-14;
+    if (up.momentum[q] < (lo - slack) * up.density || up.momentum[q] > (hi + slack) * up.density) return true;
+  }
+  return false;
+}
+
 void FlowSolver::bound_momentum_fluxes(int d, double dt, bool last) {
-  // F7's bound: a cell whose new velocity (any component) would leave the range of its own and its
-  // two neighbours' along d takes the plain upwind value on both its faces, which makes its update
-  // a convex combination of those velocities. Marks only grow, so the rounds end (at worst with
-  // every face upwind); the marks are exchanged so that both ranks of a face choose alike. A round
-  // after the first checks only the cells next to the ones just marked (the rest of the fluxes did
-  // not change), so the rounds cost one pass over the cells and short lists.
+  // F7's bound: a cell whose new velocity would overshoot (bound_marked_ holds the first round's,
+  // from sweep()) takes the plain upwind value on both its faces, which makes its update a convex
+  // combination of those velocities. Marks only grow, so the rounds end (at worst with every face
+  // upwind); the marks are exchanged so that both ranks of a face choose alike. A round checks only
+  // the cells next to the ones just marked (the rest of the fluxes did not change). bound_redo_
+  // gets every owned cell next to a face that changed, whose update sweep() makes again.
   const FluidGrid& g = *grid_;
   const double h = g.h(d);
   const std::ptrdiff_t st = g.stride(d);
   const auto& uf = uf_[d];
-  auto overshoots = [&](std::size_t c) {
-    const double div = last ? -dilatation_[c] : (uf[c + st] - uf[c]) * dt / h;  // as the update's (F4)
-    const SweepUpdate up = sweep_update(c, st, div);
-    for (int q = 0; q < 3; ++q) {
-      const auto& u = u_[q];
-      const double lo = std::min({u[c - st], u[c], u[c + st]}), hi = std::max({u[c - st], u[c], u[c + st]});
-      const double slack = kMomentumBoundSlack * (std::abs(lo) + std::abs(hi)) + 1e-14;
-      if (up.momentum[q] < (lo - slack) * up.density || up.momentum[q] > (hi + slack) * up.density) return true;
-    }
-    return false;
-  };
   auto upwind_face = [&](std::size_t face) {
     const std::size_t up = uf[face] > 0 ? face - st : face;
     for (int q = 0; q < 3; ++q) flux_q_[q][face] = flux_m_[face] * u_[q][up];
@@ -382,10 +401,9 @@ void FlowSolver::bound_momentum_fluxes(int d, double dt, bool last) {
   std::fill(upwind_cell_.begin(), upwind_cell_.end(), 0.0);
   auto& marked = bound_marked_;
   auto& check = bound_check_;
-  marked.clear();
-  for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)}, [&](int i, int j, int k) {
-    if (overshoots(g.at(i, j, k))) marked.push_back({i, j, k});
-  });
+  auto& redo = bound_redo_;
+  redo.clear();
+  auto owned = [&](const std::array<int, 3>& n) { return n[d] >= g.begin(d) && n[d] < g.end(d); };
   for (double round = 1;; ++round) {
     for (const auto& m : marked) upwind_cell_[g.at(m[0], m[1], m[2])] = round;
     if (g.reduce_sum(static_cast<double>(marked.size())) == 0) return;
@@ -394,16 +412,19 @@ void FlowSolver::bound_momentum_fluxes(int d, double dt, bool last) {
     // neighbours along d are checked again; a cell just marked on the next rank (a ghost) does the
     // same to the face it shares with this rank's cell.
     check.clear();
-    auto recheck = [&](std::array<int, 3> n) {
-      if (n[d] >= g.begin(d) && n[d] < g.end(d) && upwind_cell_[g.at(n[0], n[1], n[2])] == 0) check.push_back(n);
+    auto neighbour = [&](std::array<int, 3> n) {
+      if (!owned(n)) return;
+      redo.push_back(n);
+      if (upwind_cell_[g.at(n[0], n[1], n[2])] == 0) check.push_back(n);
     };
     for (const auto& m : marked) {
       const std::size_t c = g.at(m[0], m[1], m[2]);
       upwind_face(c);
       upwind_face(c + st);
+      redo.push_back(m);
       std::array<int, 3> n = m;
-      n[d] = m[d] - 1, recheck(n);
-      n[d] = m[d] + 1, recheck(n);
+      n[d] = m[d] - 1, neighbour(n);
+      n[d] = m[d] + 1, neighbour(n);
     }
     std::array<int, 3> lo{g.begin(0), g.begin(1), g.begin(2)}, hi{g.end(0), g.end(1), g.end(2)};
     for (const int ghost : {g.begin(d) - 1, g.end(d)}) {
@@ -414,14 +435,16 @@ void FlowSolver::bound_momentum_fluxes(int d, double dt, bool last) {
         upwind_face(ghost < g.begin(d) ? c + st : c);
         std::array<int, 3> n{i, j, k};
         n[d] = ghost < g.begin(d) ? ghost + 1 : ghost - 1;
-        recheck(n);
+        neighbour(n);
       });
     }
     marked.clear();
     for (const auto& n : check) {
       const std::size_t c = g.at(n[0], n[1], n[2]);
-      if (upwind_cell_[c] == 0 && overshoots(c)) {
-        upwind_cell_[c] = round + 1;  // not checked twice if listed twice
+      if (upwind_cell_[c] != 0) continue;  // not checked twice if listed twice
+      const double div = last ? -dilatation_[c] : (uf[c + st] - uf[c]) * dt / h;  // as the update's (F4)
+      if (overshoots(c, st, sweep_update(c, st, div))) {
+        upwind_cell_[c] = round + 1;
         marked.push_back(n);
       }
     }

@@ -215,6 +215,8 @@ class FlowSolver {
     double fraction, density, momentum[3];
   };
   SweepUpdate sweep_update(std::size_t c, std::ptrdiff_t st, double div) const;
+  bool overshoots(std::size_t c, std::ptrdiff_t st, const SweepUpdate& up) const;  // F7's bound
+  void store_update(std::size_t c, const SweepUpdate& up);  // into sweep_u_, sweep_f_
   void reconstruct(int d);                  // PLIC in owned cells and one layer beyond along d
   void youngs_normal(std::size_t c, double n[3]) const;
   void interface_potential();               // interface_phi_ (F10b)
@@ -229,7 +231,9 @@ class FlowSolver {
   std::unique_ptr<PressurePoisson> poisson_;
   std::vector<double> f_, p_, rho_, mu_, indicator_, dilatation_;
   std::vector<double> upwind_cell_;  // F7's bound: the round in which a cell's faces took the upwind velocity
-  std::vector<std::array<int, 3>> bound_marked_, bound_check_;  // its lists of cells
+  std::vector<std::array<int, 3>> bound_marked_, bound_check_, bound_redo_;  // its lists of cells
+  std::array<std::vector<double>, 3> sweep_u_;  // a sweep's new velocities and fractions (swapped in)
+  std::vector<double> sweep_f_;
   std::array<std::vector<double>, 3> u_, uf_, face_accel_;
   std::array<std::vector<double>, 3> work_;  // the viscous stage's new velocities (swapped into u_)
   std::array<std::vector<double>, 3> stress_div_;  // div(tau) of the last viscous stage, when kept
