@@ -12,14 +12,18 @@ Each run is a bed (made once per distinct bed from --bed-case, under OUT/beds) a
 
 Usage: drop_sweep.py run   [--set-of series|study] [--case cases/drop_on_sand/small.yaml]
                            [--bed-case cases/drop_on_sand/bed_small.yaml] [--out runs/drop_sweep]
-                           [--ranks 2] [--only NAME,...] [--set KEY=VALUE ...]
+                           [--ranks 2] [--only NAME,...] [--set KEY=VALUE ...] [--bed-set KEY=VALUE ...]
            Runs the runs here, one after the other (one whose summary.json exists is skipped).
+           --set goes to every impact, --bed-set to every bed (e.g. --bed-set deposition.seed=1: the
+           series again on a bed of other grain orientations, in its own OUT).
        drop_sweep.py slurm [same options] [--partition P] [--time 04:00:00] [--tasks 16]
            Writes OUT/runs.txt and OUT/sweep.slurm: a job array of one task per run (sbatch it).
-       drop_sweep.py plot  [--set-of series|study] [--out ...]
+       drop_sweep.py plot  [--set-of series|study] [--out OUT[,OUT2,...]]
            series: the table (aspect, v, mv, V by eqs. 14 and 13, L, H, the bed's V before the drop,
            displaced grains, wall) in OUT/table.md and V against mv per shape in
-           OUT/crater_vs_momentum.png (Fig. 15). study: each run's V and displaced-grain count
+           OUT/crater_vs_momentum.png (Fig. 15); with several OUTs (the series on several beds),
+           each point's values on every bed, their mean and range, in the first OUT's
+           table_beds.md and crater_vs_momentum_beds.png. study: each run's V and displaced-grain count
            against the mean and standard deviation of the orientation repeats (the base run among
            them), and V against its wall time, in OUT/study.md and OUT/study.png.
 """
@@ -78,7 +82,7 @@ def run(args):
             fcntl.flock(lock, fcntl.LOCK_EX)
             if not os.path.exists(os.path.join(bed, 'summary.json')):
                 sh(mpirun(args.ranks) + [TESSERA, 'run', args.bed_case, '--output', bed] +
-                   sum((['--set', s] for s in bed_sets), []))
+                   sum((['--set', s] for s in bed_sets + (args.bed_set or [])), []))
         extra = ['bodies.file=' + os.path.abspath(os.path.join(bed, 'checkpoint.h5'))]
         sh(mpirun(args.ranks) + [TESSERA, 'run', args.case, '--output', out] +
            sum((['--set', s] for s in sets + extra + (args.set or [])), []))
@@ -89,7 +93,8 @@ def slurm(args):
     names = [r[0] for r in runs_of(args.set_of) if not args.only or r[0] in args.only.split(',')]
     with open(os.path.join(args.out, 'runs.txt'), 'w') as f:
         f.write('\n'.join(names) + '\n')
-    extra = ' '.join('--set %s' % shlex.quote(s) for s in args.set or [])
+    extra = ' '.join(['--set %s' % shlex.quote(s) for s in args.set or []] +
+                     ['--bed-set %s' % shlex.quote(s) for s in args.bed_set or []])
     out = os.path.abspath(args.out)
     script = f"""#!/bin/bash
 #SBATCH --job-name=drop_{args.set_of}
@@ -161,6 +166,53 @@ def plot_series(args, rows):
     print('wrote', os.path.join(args.out, 'crater_vs_momentum.png'))
 
 
+def plot_series_beds(args, outs):
+    """The series on several beds: each point's V (eq. 14) and displaced grains on every bed, with
+    their mean and range; the figure draws each bed's points and the mean."""
+    per_bed = [collect(o) for o in outs]
+    names = sorted(set.intersection(*(set(r) for r in per_bed)), key=lambda n: (per_bed[0][n]['aspect'], per_bed[0][n]['v']))
+    labels = [os.path.basename(os.path.normpath(o)) for o in outs]
+    lines = ['beds: ' + ', '.join(labels), '',
+             '| D_H/D_V | v (m/s) | mv (g cm/s) | V eq. 14 per bed (mm^3) | mean (range) | V eq. 13 mean (mm^3) | '
+             'H mean (mm) | displaced grains per bed | mean |', '|' + '---|' * 9]
+    stats = {}
+    for n in names:
+        rs = [b[n] for b in per_bed]
+        V = [r['V'] for r in rs]
+        moved = [r['moved'] for r in rs]
+        m = sum(V) / len(V)
+        stats[n] = (rs[0]['aspect'], rs[0]['mv'], m, min(V), max(V))
+        lines.append('| %.1f | %.2f | %.1f | %s | %.1f (%.1f-%.1f) | %.1f | %.2f | %s | %.1f |' % (
+            rs[0]['aspect'], rs[0]['v'], rs[0]['mv'], ', '.join('%.1f' % v for v in V), m, min(V), max(V),
+            sum(r['V13'] for r in rs) / len(rs), sum(r['H'] for r in rs) / len(rs),
+            ', '.join('%d' % k for k in moved), sum(moved) / len(moved)))
+    lines += ['', 'the measure on each bed before the drop (mm^3): ' +
+              ', '.join('%.1f' % next(iter(b.values()))['V0'] for b in per_bed)]
+    text = '\n'.join(lines)
+    print(text)
+    open(os.path.join(outs[0], 'table_beds.md'), 'w').write(text + '\n')
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    for (aspect, marker), colour in zip(((1.0, 'o'), (1.6, 's'), (2.0, '^')), ('C0', 'C1', 'C2')):
+        pts = sorted((st for st in stats.values() if abs(st[0] - aspect) < 0.05), key=lambda st: st[1])
+        if not pts:
+            continue
+        mv = [st[1] for st in pts]
+        ax.errorbar(mv, [st[2] for st in pts], yerr=[[st[2] - st[3] for st in pts], [st[4] - st[2] for st in pts]],
+                    fmt=marker + '-', color=colour, capsize=3, label='D_H/D_V = %.1f, mean and range' % aspect)
+    ax.set_xlabel('drop momentum mv [g cm/s]')
+    ax.set_ylabel('crater volume V [mm$^3$] (eq. 14)')
+    ax.set_title('crater volume against momentum, %d beds (seed Fig. 15)' % len(outs))
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    path = os.path.join(outs[0], 'crater_vs_momentum_beds.png')
+    fig.savefig(path, dpi=120)
+    print('wrote', path)
+
+
 def plot_study(args, rows):
     base = rows.get('base')
     if base is None:
@@ -215,12 +267,17 @@ def main():
     ap.add_argument('--ranks', type=int, default=2)
     ap.add_argument('--only')
     ap.add_argument('--set', action='append')
+    ap.add_argument('--bed-set', action='append')
     ap.add_argument('--partition')
     ap.add_argument('--time', default='04:00:00')
     ap.add_argument('--tasks', type=int, default=16)
     args = ap.parse_args()
     args.out = args.out or os.path.join(ROOT, 'runs', 'drop_' + args.set_of)
-    if args.mode == 'plot':
+    if args.mode == 'plot' and ',' in args.out:
+        if args.set_of != 'series':
+            sys.exit('several OUTs: the series only')
+        plot_series_beds(args, args.out.split(','))
+    elif args.mode == 'plot':
         rows = collect(args.out)
         (plot_series if args.set_of == 'series' else plot_study)(args, rows)
     else:
