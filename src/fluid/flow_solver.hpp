@@ -215,6 +215,7 @@ class FlowSolver {
     double fraction, density, momentum[3];
   };
   SweepUpdate sweep_update(std::size_t c, std::ptrdiff_t st, double div) const;
+  double sweep_dilatation(std::size_t c, int d, double dt, bool last) const;  // div of F4's dilatation term
   bool overshoots(std::size_t c, std::ptrdiff_t st, const SweepUpdate& up) const;  // F7's bound
   void store_update(std::size_t c, const SweepUpdate& up);  // into sweep_u_, sweep_f_
   void reconstruct(int d);                  // PLIC in owned cells and one layer beyond along d
