@@ -168,7 +168,7 @@ def plot_series(args, rows):
 
 def plot_series_beds(args, outs):
     """The series on several beds: each point's V (eq. 14) and displaced grains on every bed, with
-    their mean and range; the figure draws each bed's points and the mean."""
+    their mean and range; the figure draws each shape's mean with the range as error bars."""
     per_bed = [collect(o) for o in outs]
     names = sorted(set.intersection(*(set(r) for r in per_bed)), key=lambda n: (per_bed[0][n]['aspect'], per_bed[0][n]['v']))
     labels = [os.path.basename(os.path.normpath(o)) for o in outs]
