@@ -211,6 +211,7 @@ class FractureSolver {
   Pose pose_at(std::size_t e, double t) const;  // on its piecewise-linear path (B10)
   void assign_levels();
   void advance_to(std::size_t e, double t);  // drift (x, q) from its clock to t
+  void prefetch_bond(std::size_t b) const;  // a cache hint: the bond's geometry and state
   // B7a: adds to travel_[e] how far any point of element e can have moved since its state
   // (x, q) was (x_old, q_old): the centroid's move and its farthest vertex's chord.
   void add_travel(std::size_t e, const Vec3& x_old, const Quaternion& q_old) {
