@@ -167,25 +167,29 @@ def plot_series(args, rows):
 
 
 def plot_series_beds(args, outs):
-    """The series on several beds: each point's V (eq. 14) and displaced grains on every bed, with
-    their mean and range; the figure draws each shape's mean with the range as error bars."""
+    """The series on several beds: each point's V (eq. 14) and displaced grains on every bed that ran
+    it (a bed may run only some points), with their mean, range and standard deviation; the figure
+    draws each shape's mean with the range as error bars."""
     per_bed = [collect(o) for o in outs]
-    names = sorted(set.intersection(*(set(r) for r in per_bed)), key=lambda n: (per_bed[0][n]['aspect'], per_bed[0][n]['v']))
+    every = {n: r for b in per_bed for n, r in b.items()}
+    names = sorted(every, key=lambda n: (every[n]['aspect'], every[n]['v']))
     labels = [os.path.basename(os.path.normpath(o)) for o in outs]
     lines = ['beds: ' + ', '.join(labels), '',
-             '| D_H/D_V | v (m/s) | mv (g cm/s) | V eq. 14 per bed (mm^3) | mean (range) | V eq. 13 mean (mm^3) | '
-             'H mean (mm) | displaced grains per bed | mean |', '|' + '---|' * 9]
+             '| D_H/D_V | v (m/s) | mv (g cm/s) | beds | V eq. 14 per bed (mm^3) | mean (range) | sd | '
+             'V eq. 13 mean (mm^3) | H mean (mm) | displaced grains per bed | mean |', '|' + '---|' * 11]
     stats = {}
     for n in names:
-        rs = [b[n] for b in per_bed]
+        rs = [b[n] for b in per_bed if n in b]
+        cell = lambda key, fmt: ', '.join(fmt % b[n][key] if n in b else '-' for b in per_bed)
         V = [r['V'] for r in rs]
         moved = [r['moved'] for r in rs]
         m = sum(V) / len(V)
+        sd = math.sqrt(sum((v - m) ** 2 for v in V) / (len(V) - 1)) if len(V) > 1 else float('nan')
         stats[n] = (rs[0]['aspect'], rs[0]['mv'], m, min(V), max(V))
-        lines.append('| %.1f | %.2f | %.1f | %s | %.1f (%.1f-%.1f) | %.1f | %.2f | %s | %.1f |' % (
-            rs[0]['aspect'], rs[0]['v'], rs[0]['mv'], ', '.join('%.1f' % v for v in V), m, min(V), max(V),
+        lines.append('| %.1f | %.2f | %.1f | %d | %s | %.1f (%.1f-%.1f) | %.1f | %.1f | %.2f | %s | %.1f |' % (
+            rs[0]['aspect'], rs[0]['v'], rs[0]['mv'], len(rs), cell('V', '%.1f'), m, min(V), max(V), sd,
             sum(r['V13'] for r in rs) / len(rs), sum(r['H'] for r in rs) / len(rs),
-            ', '.join('%d' % k for k in moved), sum(moved) / len(moved)))
+            cell('moved', '%d'), sum(moved) / len(moved)))
     lines += ['', 'the measure on each bed before the drop (mm^3): ' +
               ', '.join('%.1f' % next(iter(b.values()))['V0'] for b in per_bed)]
     text = '\n'.join(lines)
