@@ -212,18 +212,22 @@ void DemScene::summarise(nlohmann::json& s) {
     double local = 0;
     for (const auto& w : dem_->work()) local += w.weight;
     s["imbalance"] = imbalance(comm, local);  // the final cut planes: "cuts" (run_loop.cpp)
-    // Per rank, in rank order (the timers' per_rank beside them): bodies, work, halo bytes sent.
+    // Per rank, in rank order (the timers' per_rank beside them): bodies, work, halo bytes sent,
+    // the list's relists (T5a: all ranks relist together, so these are equal).
     const int size = decomp_->size();
-    const double mine[3] = {static_cast<double>(dem_->particles().owned), local,
-                            static_cast<double>(dem_->halo_bytes_sent())};
-    std::vector<double> all(3 * static_cast<std::size_t>(size));
-    MPI_Allgather(mine, 3, MPI_DOUBLE, all.data(), 3, MPI_DOUBLE, comm);
+    constexpr int kPer = 4;
+    const double mine[kPer] = {static_cast<double>(dem_->particles().owned), local,
+                               static_cast<double>(dem_->halo_bytes_sent()), static_cast<double>(dem_->list_relists())};
+    std::vector<double> all(kPer * static_cast<std::size_t>(size));
+    MPI_Allgather(mine, kPer, MPI_DOUBLE, all.data(), kPer, MPI_DOUBLE, comm);
     nlohmann::json per_rank{{"bodies", nlohmann::json::array()}, {"work", nlohmann::json::array()},
-                            {"halo_bytes_sent", nlohmann::json::array()}};
+                            {"halo_bytes_sent", nlohmann::json::array()},
+                            {"neighbor_list_relists", nlohmann::json::array()}};
     for (int r = 0; r < size; ++r) {
-      per_rank["bodies"].push_back(static_cast<long>(all[3 * r]));
-      per_rank["work"].push_back(all[3 * r + 1]);
-      per_rank["halo_bytes_sent"].push_back(static_cast<long>(all[3 * r + 2]));
+      per_rank["bodies"].push_back(static_cast<long>(all[kPer * r]));
+      per_rank["work"].push_back(all[kPer * r + 1]);
+      per_rank["halo_bytes_sent"].push_back(static_cast<long>(all[kPer * r + 2]));
+      per_rank["neighbor_list_relists"].push_back(static_cast<long>(all[kPer * r + 3]));
     }
     s["per_rank"] = per_rank;
     if (balance_.enabled) s["balance"] = balance_.summary();

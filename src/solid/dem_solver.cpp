@@ -393,7 +393,9 @@ void DemSolver::relist_stale() {
     travel_[i] = element_travel(i, &x_list_[3 * i], &q_list_[4 * i]);
     any = any || travel_[i] > 0.5 * skin_;
   }
-  if (!any) return;
+  // All ranks relist at the sub-step where any of them must (needs_rebuild's reduction), so that
+  // each waits at the next reduction for the slowest relist, not for the others' one after another.
+  if (!any && !relist_due_) return;
   // Once one body is stale, every body past half of its allowance is listed with it: one merge of
   // the list for all that move, not one per sub-step (T5a).
   for (std::size_t i = 0; i < n; ++i) stale_[i] = travel_[i] > 0.25 * skin_;
@@ -411,7 +413,8 @@ void DemSolver::relist_stale() {
 bool DemSolver::needs_rebuild() {
   // [0]: squared largest displacement since the list build; [1]: since the moving walls' candidates
   // were last found (sphere bodies; the same as [0] for shaped ones).
-  double max2[2] = {0, 0};
+  // [2]: 1 where an owned body is past s/2 since its own listing (T5a's trigger, taken by all ranks).
+  double max2[3] = {0, 0, 0};
   const bool moving = !walls_.meshes().empty() || !free_.empty();
   {
     auto scope = timers_.scope("neighbor");  // the displacement check is part of the list's cost
@@ -434,6 +437,8 @@ bool DemSolver::needs_rebuild() {
             max2[0] = skin_ * skin_;
         }
       max2[1] = max2[0];
+      for (std::size_t i = 0; i < p_.owned && 3 * i < x_list_.size() && max2[2] == 0; ++i)
+        if (element_travel(i, &x_list_[3 * i], &q_list_[4 * i]) > half) max2[2] = 1;
     } else if (shaped()) {
       // A contact sphere at distance c from its body's centre has moved at most
       // |dx| + 2 c sin(theta/2), theta the body's rotation since the build (cos(theta/2) = |q . q0|).
@@ -447,7 +452,8 @@ bool DemSolver::needs_rebuild() {
     }
   }
   auto t = timers_.scope("reduction");
-  MPI_Allreduce(MPI_IN_PLACE, max2, 2, MPI_DOUBLE, MPI_MAX, decomp_.comm());
+  MPI_Allreduce(MPI_IN_PLACE, max2, 3, MPI_DOUBLE, MPI_MAX, decomp_.comm());
+  relist_due_ = max2[2] > 0;
   refresh_moving_ = false;
   if (!moving) return max2[0] > 0.25 * skin_ * skin_;
   // Moving meshes and free spheres: a body and a wall approach each other by at most the sum of

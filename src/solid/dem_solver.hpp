@@ -289,6 +289,7 @@ class DemSolver {
   std::vector<double> x_list_, q_list_;
   std::vector<char> stale_;
   std::vector<double> travel_;  // relist_stale(): each body's travel since its own listing (T13's bound)
+  bool relist_due_ = false;     // needs_rebuild(): some rank holds a body past s/2 (T5a: all relist then)
   bool relisting() const;
   ContactElements list_elements();
   void relist_stale();

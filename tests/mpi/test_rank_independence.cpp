@@ -114,6 +114,12 @@ TEST(RankIndependence, ShapedGrainsAreBitwiseIdenticalOn1To4Ranks) {
       // The lattice filled the 12 mm box; the fallen bed is 5.3 mm high (measured).
       cross += expect_split_and_moved(dir + "/" + std::to_string(ranks) + grid, ranks, 8e-3);
       relists += lists(dir + "/" + std::to_string(ranks) + grid).second;
+      // T5a: a rank with a stale body makes every rank relist at that sub-step (each then waits for
+      // the slowest relist, not for the others' in turn), so every rank counts the same relists.
+      std::ifstream file(dir + "/" + std::to_string(ranks) + grid + "/summary.json");
+      const auto per_rank = nlohmann::json::parse(file)["per_rank"]["neighbor_list_relists"];
+      ASSERT_EQ(per_rank.size(), static_cast<std::size_t>(ranks)) << grid;
+      for (const auto& count : per_rank) EXPECT_EQ(count.get<long>(), per_rank[0].get<long>()) << grid;
     }
   }
   if (rank == 0) {
