@@ -388,8 +388,8 @@ void DemSolver::relist_stale() {
   const std::size_t n = p_.size();
   stale_.assign(n, 0);
   travel_.resize(n);
-  bool any = false;
-  for (std::size_t i = 0; i < n; ++i) {
+  bool any = false;  // the owned ones were found by needs_rebuild (relist_due_)
+  for (std::size_t i = p_.owned; i < n; ++i) {
     travel_[i] = element_travel(i, &x_list_[3 * i], &q_list_[4 * i]);
     any = any || travel_[i] > 0.5 * skin_;
   }
@@ -399,7 +399,7 @@ void DemSolver::relist_stale() {
   // Once one body is stale, every body past half of its allowance is listed with it: one merge of
   // the list for all that move, not one per sub-step (T5a).
   for (std::size_t i = 0; i < n; ++i) stale_[i] = travel_[i] > 0.25 * skin_;
-  pairs_.list().relist(list_elements(), skin_, stale_, travel_);
+  if (pairs_.list().relist(list_elements(), skin_, stale_, travel_)) stale_.assign(n, 1);  // all listed anew
   for (std::size_t i = 0; i < n; ++i)
     if (stale_[i]) {
       for (int d = 0; d < 3; ++d) x_list_[3 * i + d] = p_.x[3 * i + d];
@@ -437,8 +437,13 @@ bool DemSolver::needs_rebuild() {
             max2[0] = skin_ * skin_;
         }
       max2[1] = max2[0];
-      for (std::size_t i = 0; i < p_.owned && 3 * i < x_list_.size() && max2[2] == 0; ++i)
-        if (element_travel(i, &x_list_[3 * i], &q_list_[4 * i]) > half) max2[2] = 1;
+      // The owned bodies' travels since their listings, kept for relist_stale (they do not move
+      // again before it; the ghosts' places come with the forward exchange after this).
+      travel_.resize(p_.size());
+      for (std::size_t i = 0; i < p_.owned && 3 * i < x_list_.size(); ++i) {
+        travel_[i] = element_travel(i, &x_list_[3 * i], &q_list_[4 * i]);
+        if (travel_[i] > half) max2[2] = 1;
+      }
     } else if (shaped()) {
       // A contact sphere at distance c from its body's centre has moved at most
       // |dx| + 2 c sin(theta/2), theta the body's rotation since the build (cos(theta/2) = |q . q0|).

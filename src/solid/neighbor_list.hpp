@@ -51,8 +51,10 @@ class NeighborList {
   // found from a grid of all elements at their current positions, the reach grown, for a partner
   // not listed again, by travel[its body] (how far it has gone since its own listing, at most
   // skin/2); the other pairs stay, with their histories, and the list stays sorted. Valid while
-  // every body has moved less than skin/2 since its own last listing (theory T5a).
-  void relist(const ContactElements& e, double skin, const std::vector<char>& stale, const std::vector<double>& travel);
+  // every body has moved less than skin/2 since its own last listing (theory T5a). When most
+  // elements are stale it lists every pair afresh instead, as build() does (histories by key), and
+  // returns true: every body is then listed at its current place.
+  bool relist(const ContactElements& e, double skin, const std::vector<char>& stale, const std::vector<double>& travel);
 
   std::size_t size() const { return first.size(); }
   std::vector<std::int32_t> first, second;  // local element indices; key[first] < key[second]
@@ -81,6 +83,7 @@ class NeighborList {
   // Appends (a, b) to candidates_ when it may be listed: not two ghosts, not one body, within reach.
   void consider(const ContactElements& e, double skin, std::size_t a, std::size_t b, double extra = 0.0);
   void merge_relisted(const ContactElements& e);
+  void list_all(const ContactElements& e, double skin, const HistoryMap& extra);  // build() less its count
   // Elements listed again since the last bin() (relist): they are not looked up in the cells, where
   // they lie where they were, but in moved_cells_ (cell, element), sorted, at their current place.
   std::vector<char> moved_;

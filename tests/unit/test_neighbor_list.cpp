@@ -100,7 +100,7 @@ struct Relister {
       if (travel[i] > 0.5 * skin) stale[i] = 1, any = true;
     }
     if (!any) return;
-    list.relist(elements_of(p), skin, stale, travel);
+    if (list.relist(elements_of(p), skin, stale, travel)) stale.assign(p.size(), 1);  // all listed anew
     for (std::size_t i = 0; i < p.size(); ++i)
       if (stale[i]) std::copy_n(&p.x[3 * i], 3, &listed_at[3 * i]);
   }
@@ -134,8 +134,11 @@ TEST(NeighborList, RelistReachesAPartnerThatMayComeBack) {
   ParticleStore p;
   p.push_back(1, 0, r, 1, 1, {0, 0, 0}, {}, {});
   p.push_back(2, 0, r, 1, 1, {2.3, 0, 0}, {}, {});
-  p.owned = 2;
-  p.order = {1, 2};
+  // Eight bodies at rest far away, so that one stale body of ten is relisted alone (a quarter of
+  // them stale would make the relist a whole list).
+  for (int k = 0; k < 8; ++k) p.push_back(3 + k, 0, r, 1, 1, {0, 100.0 + 3.0 * k, 0}, {}, {});
+  p.owned = p.size();
+  for (std::size_t i = 0; i < p.size(); ++i) p.order[i] = p.id[i];
   Relister rl{p, s, {}, {}};
   rl.build();
   EXPECT_EQ(rl.list.size(), 0u);  // 2.3 apart: beyond 2 r + s
@@ -180,6 +183,49 @@ TEST(NeighborList, RelistedListStaysCompleteUnderRandomMotion) {
       }
   }
   EXPECT_GT(relists, 50u);
+}
+
+// Grains falling together (a bed's deposition): when most bodies are stale the relist lists every
+// pair afresh, as a build at the same places would, keeping the springs of the pairs that stay; when
+// few are, only theirs.
+TEST(NeighborList, MostlyStaleRelistIsAWholeListWithTheSprings) {
+  ParticleStore p = make_bodies(400, 100, 0);
+  const double skin = 1.5e-4;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    for (int d = 0; d < 3; ++d) p.x[3 * i + d] = 0.01 + 0.45 * (p.x[3 * i + d] - 0.01);
+  Relister rl{p, skin, {}, {}};
+  rl.build();
+  for (std::size_t k = 0; k < rl.list.size(); ++k) rl.list.history[3 * k] = static_cast<double>(rl.list.keys[k] % 1000 + 1);
+  const std::size_t listed = rl.list.size();
+  // All but five bodies fall by 0.6 skin; the five stay and so come 0.6 skin closer to those above.
+  for (std::size_t i = 5; i < p.size(); ++i) p.x[3 * i + 2] -= 0.6 * skin;
+  std::vector<char> stale(p.size(), 1);
+  std::vector<double> travel(p.size(), 0.6 * skin);
+  for (std::size_t i = 0; i < 5; ++i) stale[i] = 0, travel[i] = 0.0;
+  const std::vector<PairKey> before = rl.list.keys;
+  const std::vector<double> springs = rl.list.history;
+  EXPECT_TRUE(rl.list.relist(elements_of(p), skin, stale, travel));
+  NeighborList fresh;
+  fresh.build(p, skin, {});
+  EXPECT_EQ(rl.list.keys, fresh.keys);
+  EXPECT_EQ(rl.list.first, fresh.first);
+  EXPECT_EQ(rl.list.second, fresh.second);
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < rl.list.size(); ++k) {
+    const auto it = std::lower_bound(before.begin(), before.end(), rl.list.keys[k]);
+    const bool was = it != before.end() && *it == rl.list.keys[k];
+    EXPECT_EQ(rl.list.history[3 * k], was ? springs[3 * static_cast<std::size_t>(it - before.begin())] : 0.0);
+    kept += was;
+  }
+  EXPECT_GT(kept, listed / 2);
+  EXPECT_EQ(rl.list.relists, 1u);
+  EXPECT_EQ(rl.list.builds, 1u);  // the first build only: a relist is counted as one
+  // Five stale bodies of 500: listed again alone.
+  rl.listed_at = p.x;
+  for (std::size_t i = 0; i < 5; ++i) p.x[3 * i] += 0.6 * skin;
+  std::vector<char> few(p.size(), 0);
+  for (std::size_t i = 0; i < 5; ++i) few[i] = 1;
+  EXPECT_FALSE(rl.list.relist(elements_of(p), skin, few, std::vector<double>(p.size(), 0.0)));
 }
 
 }  // namespace
