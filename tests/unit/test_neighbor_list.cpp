@@ -205,6 +205,13 @@ TEST(NeighborList, MostlyStaleRelistIsAWholeListWithTheSprings) {
   const std::vector<PairKey> before = rl.list.keys;
   const std::vector<double> springs = rl.list.history;
   EXPECT_TRUE(rl.list.relist(elements_of(p), skin, stale, travel));
+  std::set<PairKey> expected;  // brute force: every pair within R_a + R_b + skin now
+  for (std::size_t a = 0; a < p.size(); ++a)
+    for (std::size_t b = a + 1; b < p.size(); ++b) {
+      const double cut = p.radius[a] + p.radius[b] + skin;
+      if ((a < p.owned || b < p.owned) && norm2(p.pos(a) - p.pos(b)) < cut * cut) expected.insert(pair_key(p.order[a], p.order[b]));
+    }
+  EXPECT_EQ(std::set<PairKey>(rl.list.keys.begin(), rl.list.keys.end()), expected);
   NeighborList fresh;
   fresh.build(p, skin, {});
   EXPECT_EQ(rl.list.keys, fresh.keys);
