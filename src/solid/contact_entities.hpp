@@ -38,6 +38,10 @@ class ContactEntities {
   void layout(const std::vector<ShapeTemplate>& shapes, std::int64_t key_stride);
   // Shaped mode: the positions of the elements of bodies [first, end) from their x and q.
   void place(const std::vector<ShapeTemplate>& shapes, std::size_t first, std::size_t end);
+  // Shaped mode: the positions of the elements [first, last) (sorted indices) alone.
+  void place_listed(const std::vector<ShapeTemplate>& shapes, const std::int32_t* first, const std::int32_t* last);
+  // Element e's position now from its body's x and q (the value place() writes), mirror or not.
+  Vec3 position(const std::vector<ShapeTemplate>& shapes, std::size_t e) const;
 
   std::size_t owned() const { return shaped_ ? e_owned_ : p_.owned; }  // entities of owned bodies
   std::size_t size() const { return shaped_ ? e_body_.size() : p_.size(); }

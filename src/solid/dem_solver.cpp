@@ -351,6 +351,7 @@ void DemSolver::rebuild() {
     plane_walls_.find(entities_, walls_, skin_, histories);
     x_moving_build_ = x_build_;
     find_moving_candidates();
+    find_placed();
   }
 }
 
@@ -396,6 +397,7 @@ void DemSolver::relist_stale() {
   // All ranks relist at the sub-step where any of them must (needs_rebuild's reduction), so that
   // each waits at the next reduction for the slowest relist, not for the others' one after another.
   if (!any && !relist_due_) return;
+  if (placing_listed_) entities_.place(shapes_, 0, p_.size());  // the list reads every element
   // Once one body is stale, every body past half of its allowance is listed with it: one merge of
   // the list for all that move, not one per sub-step (T5a).
   for (std::size_t i = 0; i < n; ++i) stale_[i] = travel_[i] > 0.25 * skin_;
@@ -408,6 +410,34 @@ void DemSolver::relist_stale() {
   pairs_.start_list();
   plane_walls_.refind(entities_, walls_, skin_, stale_);
   fill_coefficients();
+  find_placed();
+}
+
+void DemSolver::place_elements(bool ghosts) {
+  if (!placing_listed_) {
+    ghosts ? entities_.place(shapes_, p_.owned, p_.size()) : entities_.place(shapes_, 0, p_.owned);
+    return;
+  }
+  const std::int32_t* e = placed_.data();
+  ghosts ? entities_.place_listed(shapes_, e + placed_owned_, e + placed_.size())
+         : entities_.place_listed(shapes_, e, e + placed_owned_);
+}
+
+void DemSolver::find_placed() {
+  placing_listed_ = shaped() && relisting();
+  if (!placing_listed_) return;
+  const std::size_t n = entities_.size();
+  std::vector<char> in(n, 0);
+  const auto& list = pairs_.list();
+  for (std::size_t k = 0; k < list.size(); ++k) in[static_cast<std::size_t>(list.first[k])] = in[static_cast<std::size_t>(list.second[k])] = 1;
+  for (const auto e : plane_walls_.entities()) in[static_cast<std::size_t>(e)] = 1;
+  placed_.clear();
+  placed_owned_ = 0;
+  for (std::size_t e = 0; e < n; ++e)
+    if (in[e]) {
+      placed_.push_back(static_cast<std::int32_t>(e));
+      if (e < entities_.owned()) ++placed_owned_;
+    }
 }
 
 bool DemSolver::needs_rebuild() {
@@ -501,7 +531,7 @@ void DemSolver::first_half_kick_and_drift() {
   integrate_first();
   kick_free_spheres(true);
   kick_pivots(false);
-  if (shaped()) entities_.place(shapes_, 0, p_.owned);
+  if (shaped()) place_elements(false);
   for (auto& m : walls_.meshes()) m.advance(dt_);
 }
 
@@ -513,7 +543,7 @@ void DemSolver::update_neighbours() {
   {
     auto t = timers_.scope("ghost_comm");
     halo_.forward(p_);
-    if (shaped()) entities_.place(shapes_, p_.owned, p_.size());
+    if (shaped()) place_elements(true);
   }
   if (relisting()) relist_stale();
   if (refresh_moving_) refresh_moving_candidates();

@@ -293,6 +293,13 @@ class DemSolver {
   bool relisting() const;
   ContactElements list_elements();
   void relist_stale();
+  // Relisting: between lists the stages read only the elements of a listed pair or a wall entry,
+  // so only those are placed a step (placed_, sorted; the owned ones first); a list places all.
+  std::vector<std::int32_t> placed_;
+  std::size_t placed_owned_ = 0;
+  bool placing_listed_ = false;
+  void place_elements(bool ghosts);
+  void find_placed();
   // The most a contact sphere of body i has moved since pose (x0, q0): |dx| + 2 c sin(theta / 2).
   double element_travel(std::size_t i, const double* x0, const double* q0) const;
   std::vector<double> arm_;         // per shape: the farthest contact-sphere centre from the body's

@@ -41,7 +41,8 @@ DemStats DemSolver::stats() const {
   }
   // Contacts between elements (bodies for spheres): positions and radii of elements.
   const bool sh = shaped();
-  auto ex = [&](std::size_t a) { return entities_.centre(a); };
+  // Elements where their bodies are now (between lists only the listed ones are placed a step).
+  auto ex = [&](std::size_t a) { return entities_.position(shapes_, a); };
   auto er = [&](std::size_t a) { return entities_.radius(a); };
   auto eid = [&](std::size_t a) { return p_.id[entities_.body(a)]; };
   const std::size_t owned_elements = entities_.owned();

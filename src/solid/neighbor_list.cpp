@@ -137,6 +137,47 @@ void NeighborList::list_all(const ContactElements& p, double skin, const History
   auto consider = [&](std::size_t a, std::size_t b) { this->consider(p, skin, a, b); };
   const std::int32_t* body = p.body;
 
+  // The binned elements in cell order: most pairs the stencil meets are rejected (one body's
+  // spheres share cells, or the two are too far apart), and reading their places in sequence costs
+  // less than gathering them from the element arrays. A cell holds a body's elements in one run
+  // (bin() fills it in element order, and a body's elements are consecutive): run_end_ skips it
+  // whole (docs/performance.md, 2026-12-05).
+  const std::size_t binned = static_cast<std::size_t>(cell_start_.back());
+  packed_.resize(binned);
+  packed_body_.resize(binned);
+  run_end_.resize(binned);
+  for (std::size_t k = 0; k < binned; ++k) {
+    const auto i = static_cast<std::size_t>(cell_items_[k]);
+    packed_[k] = {p.x[p.stride * i], p.x[p.stride * i + 1], p.x[p.stride * i + 2], p.radius[i]};
+    packed_body_[k] = body ? body[i] : static_cast<std::int32_t>(i);
+  }
+  const std::size_t ncell = cell_start_.size() - 1;
+  for (std::size_t c = 0; c < ncell; ++c)
+    for (int k = cell_start_[c + 1] - 1; k >= cell_start_[c]; --k)
+      run_end_[k] = k + 1 < cell_start_[c + 1] && packed_body_[k + 1] == packed_body_[k] ? run_end_[k + 1] : k + 1;
+  const auto owned = static_cast<std::int32_t>(p.owned);
+  // consider()'s test on the packed copies, the same arithmetic in the same order (a = cell_items_[u]),
+  // for the elements [v, end) of one cell that are not u's body's.
+  auto consider_binned = [&](int u, int v, int end) {
+    const std::int32_t a = cell_items_[u], body_u = packed_body_[u];
+    const auto& xa = packed_[u];
+    while (v < end) {
+      if (packed_body_[v] == body_u) {
+        v = run_end_[v];
+        continue;
+      }
+      const std::int32_t b = cell_items_[v];
+      const auto& xb = packed_[v++];
+      if (a >= owned && b >= owned) continue;
+      const double dx = xa[0] - xb[0], dy = xa[1] - xb[1], dz = xa[2] - xb[2];
+      const double r2 = dx * dx + dy * dy + dz * dz;
+      const double cut = xa[3] + xb[3] + skin;
+      if (r2 >= cut * cut) continue;
+      const bool a_low = p.key[a] < p.key[b];
+      candidates_.push_back({pair_key(p.key[a], p.key[b]), a_low ? a : b, a_low ? b : a});
+    }
+  };
+
   // Small-small: each pair once, from a half stencil over cells (the cell itself, then the 13
   // neighbours ahead of it in (z, y, x) order).
   static constexpr int kHalf[13][3] = {{1, 0, 0},  {-1, 1, 0}, {0, 1, 0},  {1, 1, 0}, {-1, -1, 1},
@@ -148,14 +189,12 @@ void NeighborList::list_all(const ContactElements& p, double skin, const History
         const int c = (cz * nc[1] + cy) * nc[0] + cx;
         const int begin = cell_start_[c], end = cell_start_[c + 1];
         if (begin == end) continue;
-        for (int u = begin; u < end; ++u)
-          for (int v = u + 1; v < end; ++v) consider(cell_items_[u], cell_items_[v]);
+        for (int u = begin; u < end; ++u) consider_binned(u, run_end_[u], end);
         for (const auto& o : kHalf) {
           const int x = cx + o[0], y = cy + o[1], z = cz + o[2];
           if (x < 0 || y < 0 || z < 0 || x >= nc[0] || y >= nc[1] || z >= nc[2]) continue;
           const int cc = (z * nc[1] + y) * nc[0] + x;
-          for (int u = begin; u < end; ++u)
-            for (int v = cell_start_[cc]; v < cell_start_[cc + 1]; ++v) consider(cell_items_[u], cell_items_[v]);
+          for (int u = begin; u < end; ++u) consider_binned(u, cell_start_[cc], cell_start_[cc + 1]);
         }
       }
   // Large-small: each large body scans the cells within its reach.

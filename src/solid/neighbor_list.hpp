@@ -13,6 +13,7 @@
 // each body in the order of its partners' keys, whatever the decomposition: results are bitwise
 // independent of the rank count (tests/mpi/test_rank_independence.cpp).
 #pragma once
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -73,6 +74,10 @@ class NeighborList {
   std::vector<PairKey> previous_keys_;
   std::vector<double> previous_history_;
   std::vector<std::int32_t> cell_start_, cell_items_, cell_of_, large_;
+  // list_all(): the binned elements' places and radii (x, y, z, r) and bodies in cell_items_'
+  // order, so that the half stencil reads them in sequence rather than scattered over the arrays.
+  std::vector<std::array<double, 4>> packed_;
+  std::vector<std::int32_t> packed_body_, run_end_;
   // The grid of the last bin(): cells of width 1 / inv_h_ from lo_, nc_ per direction; elements
   // larger than r_ref_ are in large_, not in the cells.
   int nc_[3] = {1, 1, 1};

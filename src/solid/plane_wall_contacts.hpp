@@ -23,6 +23,8 @@ namespace tessera {
 
 class PlaneWallContacts {
  public:
+  // The entities of the entries (sorted, an entity once per wall it may touch).
+  const std::vector<std::int32_t>& entities() const { return entity_; }
   // At a rebuild: the entries within radius + skin of the owned entities, in (entity, slot) order;
   // shaped mode: each with its spring from the previous list, else from `extra`, else zero.
   void find(const ContactEntities& entities, const Walls& walls, double skin, const HistoryMap& extra);
