@@ -8,6 +8,7 @@ namespace tessera {
 void ContactEntities::layout(const std::vector<ShapeTemplate>& shapes, std::int64_t key_stride) {
   const std::size_t n = p_.size();
   e_first_.resize(n + 1);
+  e_reach_.resize(n);
   e_body_.clear(), e_key_.clear(), e_r_.clear();
   for (std::size_t i = 0; i < n; ++i) {
     e_first_[i] = e_body_.size();
@@ -15,6 +16,7 @@ void ContactEntities::layout(const std::vector<ShapeTemplate>& shapes, std::int6
     const int sh = p_.shape[i];
     const std::size_t count = sh > 0 ? shapes[sh - 1].spheres.size() : 1;
     const double r = sh > 0 ? shapes[sh - 1].sphere_radius : p_.radius[i];
+    e_reach_[i] = sh > 0 ? shapes[sh - 1].bounding_radius : r;
     for (std::size_t k = 0; k < count; ++k) {
       e_body_.push_back(static_cast<std::int32_t>(i));
       e_key_.push_back(p_.order[i] * key_stride + static_cast<std::int64_t>(k));

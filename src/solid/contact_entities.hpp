@@ -54,6 +54,8 @@ class ContactEntities {
   const std::vector<std::int32_t>& element_body() const { return e_body_; }
   const std::vector<std::int64_t>& element_key() const { return e_key_; }
   const std::vector<double>& element_radius() const { return e_r_; }
+  // Shaped mode: how far body i's elements reach from its centre (farthest centre plus radius).
+  double element_reach(std::size_t i) const { return e_reach_[i]; }
 
   // Position and radius, and motion, as the contacts read them this step (the mirrors'; a disc's
   // from the body arrays).
@@ -123,6 +125,7 @@ class ContactEntities {
   std::vector<double> e_r_;
   std::vector<std::size_t> e_first_;  // per local body: its first element (size bodies + 1)
   std::size_t e_owned_ = 0;
+  std::vector<double> e_reach_;  // per local body (shaped mode): see element_reach
   std::vector<KernelGeometry> geometry_;
   std::vector<KernelMotion> motion_;
   std::vector<KernelForce> force_;

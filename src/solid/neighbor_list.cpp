@@ -141,7 +141,7 @@ void NeighborList::list_all(const ContactElements& p, double skin, const History
   // spheres share cells, or the two are too far apart), and reading their places in sequence costs
   // less than gathering them from the element arrays. A cell holds a body's elements in one run
   // (bin() fills it in element order, and a body's elements are consecutive): run_end_ skips it
-  // whole (docs/performance.md, 2026-12-05).
+  // whole (docs/performance.md, 2026-12-04, sixth session).
   const std::size_t binned = static_cast<std::size_t>(cell_start_.back());
   packed_.resize(binned);
   packed_body_.resize(binned);

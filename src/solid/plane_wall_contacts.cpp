@@ -3,6 +3,37 @@
 
 namespace tessera {
 
+namespace {
+
+// Shaped mode: can an element of element e's body come within its radius + skin of a wall? Its
+// centre is within element_reach - r of the body's, and a wall's overlap is the radius less a
+// distance that changes at most as fast as the point moves, so a body farther than element_reach
+// + skin from every wall has no entry (one skin more as a margin for round-off). Asked once a body
+// (the cache holds the last body's answer); sphere bodies always answer yes.
+struct NearWalls {
+  const ContactEntities& entities;
+  const std::vector<WallPrimitive>& prims;
+  double skin;
+  std::size_t body = static_cast<std::size_t>(-1);
+  bool near = true;
+  bool operator()(std::size_t e) {
+    if (!entities.shaped()) return true;
+    const std::size_t i = entities.body(e);
+    if (i == body) return near;
+    body = i;
+    near = false;
+    const Vec3 x = entities.bodies().pos(i);
+    const double reach = entities.element_reach(i) + 2.0 * skin;
+    for (const auto& w : prims) {
+      Vec3 n;
+      if (w.overlap(x, reach, n) > 0.0) return near = true;
+    }
+    return near;
+  }
+};
+
+}  // namespace
+
 void PlaneWallContacts::find(const ContactEntities& entities, const Walls& walls, double skin,
                              const HistoryMap& extra) {
   old_keys_.swap(keys_), old_hist_.swap(hist_);
@@ -12,7 +43,9 @@ void PlaneWallContacts::find(const ContactEntities& entities, const Walls& walls
   const auto& prims = walls.primitives();
   const bool sh = entities.shaped();
   std::size_t old = 0;
+  NearWalls near{entities, prims, skin};
   for (std::size_t e = 0; e < entities.owned(); ++e) {
+    if (!near(e)) continue;
     const Vec3 xe = entities.centre(e);
     for (std::size_t s = 0; s < prims.size(); ++s) {
       Vec3 n;
@@ -44,12 +77,17 @@ void PlaneWallContacts::refind(const ContactEntities& entities, const Walls& wal
   const auto& old_hist = old_hist_;
   const auto& prims = walls.primitives();
   std::size_t o = 0;
+  NearWalls near{entities, prims, skin};
   for (std::size_t e = 0; e < entities.owned(); ++e) {
     if (!stale_body[entities.body(e)]) {
       for (; o < old_entity.size() && static_cast<std::size_t>(old_entity[o]) == e; ++o) {
         entity_.push_back(old_entity[o]), slot_.push_back(old_slot[o]), keys_.push_back(old_keys[o]);
         hist_.insert(hist_.end(), &old_hist[3 * o], &old_hist[3 * o + 3]);
       }
+      continue;
+    }
+    if (!near(e)) {  // no entry now: its old ones go
+      while (o < old_entity.size() && static_cast<std::size_t>(old_entity[o]) == e) ++o;
       continue;
     }
     const Vec3 xe = entities.centre(e);

@@ -235,5 +235,71 @@ TEST(NeighborList, MostlyStaleRelistIsAWholeListWithTheSprings) {
   EXPECT_FALSE(rl.list.relist(elements_of(p), skin, few, std::vector<double>(p.size(), 0.0)));
 }
 
+// Elements of bodies, as shaped grains give them: many of one body share a cell (the whole list
+// skips a body's run in a cell at once), and no pair of one body is listed. Against brute force,
+// from a build and from a relist with every body stale.
+TEST(NeighborList, ElementsOfBodiesEqualBruteForce) {
+  std::uint64_t z = 777;
+  auto rnd = [&z] {
+    z = z * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(z >> 11) * 0x1.0p-53;
+  };
+  const std::size_t bodies = 300, per_body = 12, owned_bodies = 240;
+  const double r = 2e-4, skin = 8e-5, L = 0.01;
+  std::vector<double> x, radius, mass(bodies, 1.0);
+  std::vector<std::int64_t> key;
+  std::vector<std::int32_t> body;
+  for (std::size_t i = 0; i < bodies; ++i) {
+    const double c[3] = {L * rnd(), L * rnd(), L * rnd()};
+    for (std::size_t k = 0; k < per_body; ++k) {
+      for (int d = 0; d < 3; ++d) x.push_back(c[d] + 8e-4 * (rnd() - 0.5));
+      radius.push_back(r);
+      key.push_back(static_cast<std::int64_t>(((i * 7919) % 1009) * per_body + k));
+      body.push_back(static_cast<std::int32_t>(i));
+    }
+  }
+  ContactElements e;
+  e.size = bodies * per_body;
+  e.owned = owned_bodies * per_body;
+  e.x = x.data();
+  e.radius = radius.data();
+  e.key = key.data();
+  e.body = body.data();
+  e.body_mass = mass.data();
+  std::set<PairKey> expected;
+  std::size_t same_body_near = 0;
+  for (std::size_t a = 0; a < e.size; ++a)
+    for (std::size_t b = a + 1; b < e.size; ++b) {
+      double r2 = 0;
+      for (int d = 0; d < 3; ++d) r2 += (x[3 * a + d] - x[3 * b + d]) * (x[3 * a + d] - x[3 * b + d]);
+      const double cut = 2 * r + skin;
+      if (r2 >= cut * cut) continue;
+      if (body[a] == body[b]) {
+        ++same_body_near;
+        continue;
+      }
+      if (a >= e.owned && b >= e.owned) continue;
+      expected.insert(pair_key(key[a], key[b]));
+    }
+  ASSERT_GT(same_body_near, 5 * bodies);  // a body's elements crowd its cells
+  ASSERT_GT(expected.size(), 200u);
+  NeighborList list;
+  list.build(e, skin, {});
+  EXPECT_EQ(std::set<PairKey>(list.keys.begin(), list.keys.end()), expected);
+  EXPECT_EQ(list.size(), expected.size());
+  for (std::size_t k = 0; k < list.size(); ++k) EXPECT_NE(body[list.first[k]], body[list.second[k]]);
+  for (std::size_t i = 0; i < x.size(); ++i) x[i] += 1e-5 * (rnd() - 0.5);  // all move a little: all stale
+  expected.clear();
+  for (std::size_t a = 0; a < e.size; ++a)
+    for (std::size_t b = a + 1; b < e.size; ++b) {
+      double r2 = 0;
+      for (int d = 0; d < 3; ++d) r2 += (x[3 * a + d] - x[3 * b + d]) * (x[3 * a + d] - x[3 * b + d]);
+      const double cut = 2 * r + skin;
+      if (r2 < cut * cut && body[a] != body[b] && (a < e.owned || b < e.owned)) expected.insert(pair_key(key[a], key[b]));
+    }
+  EXPECT_TRUE(list.relist(e, skin, std::vector<char>(bodies, 1), std::vector<double>(bodies, 1e-5)));
+  EXPECT_EQ(std::vector<PairKey>(expected.begin(), expected.end()), list.keys);
+}
+
 }  // namespace
 }  // namespace tessera
