@@ -438,6 +438,9 @@ void DemSolver::find_placed() {
       placed_.push_back(static_cast<std::int32_t>(e));
       if (e < entities_.owned()) ++placed_owned_;
     }
+  // Where most elements are listed (a settled bed), placing them all in one pass costs less than
+  // picking them out, and a relist need not place the rest (a rank's own choice: the same bits).
+  placing_listed_ = 2 * placed_.size() < n;
 }
 
 bool DemSolver::needs_rebuild() {
