@@ -427,7 +427,8 @@ void DemSolver::find_placed() {
   placing_listed_ = shaped() && relisting();
   if (!placing_listed_) return;
   const std::size_t n = entities_.size();
-  std::vector<char> in(n, 0);
+  std::vector<char>& in = placed_mark_;
+  in.assign(n, 0);
   const auto& list = pairs_.list();
   for (std::size_t k = 0; k < list.size(); ++k) in[static_cast<std::size_t>(list.first[k])] = in[static_cast<std::size_t>(list.second[k])] = 1;
   for (const auto e : plane_walls_.entities()) in[static_cast<std::size_t>(e)] = 1;

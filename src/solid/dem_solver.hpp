@@ -296,6 +296,7 @@ class DemSolver {
   // Relisting: between lists the stages read only the elements of a listed pair or a wall entry,
   // so only those are placed a step (placed_, sorted; the owned ones first); a list places all.
   std::vector<std::int32_t> placed_;
+  std::vector<char> placed_mark_;  // find_placed's per-element marks, kept between lists
   std::size_t placed_owned_ = 0;
   bool placing_listed_ = false;
   void place_elements(bool ghosts);
