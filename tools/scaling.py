@@ -449,17 +449,21 @@ def coupled_model(a, b, runs, net):
     bodywise = avg("solid_fraction", "fluid_force")
     contact = avg("dem/contact_forces")
     per_body = avg("dem/integrate", "dem/wall_forces")
-    per_local = avg("dem/neighbor", "dem/migration", "dem/ghost_comm")
+    per_list = avg("dem/neighbor")
+    per_local = avg("dem/migration", "dem/ghost_comm")
     # The DEM's phase timers also count its work outside the sub-steps stage (the ghosts' refresh and
     # lists the coupling's stages ask for, counted there too): scaled to the stage's own time.
     dem_busy = avg("dem_substeps") - avg("dem/reduction")
-    scale = min(1.0, dem_busy / max(1e-30, contact + per_body + per_local))
-    contact, per_body, per_local = scale * contact, scale * per_body, scale * per_local
-    dem_rest = max(0.0, dem_busy - contact - per_body - per_local)
+    scale = min(1.0, dem_busy / max(1e-30, contact + per_body + per_list + per_local))
+    contact, per_body, per_list, per_local = scale * contact, scale * per_body, scale * per_list, scale * per_local
+    dem_rest = max(0.0, dem_busy - contact - per_body - per_list - per_local)
     rest = max(0.0, t1 - flow - cellwise - bodywise - avg("dem_substeps"))
     cuts = "balanced" if a.cuts == "balanced" else "equal"
     row1 = b["table"][0]
     N, B, C = float(b["cells"]), float(b["count"]), row1["load_" + cuts]["total_pairs"]
+    # The list bins the owned elements and the ghosts' within reach of the sub-box (theory T5b), when
+    # `tessera balance` counted them; else it is priced per owned plus ghost body.
+    E = sum(row1["load_" + cuts].get("owned_elements", [0.0]))
     # The 2-rank run's traffic: exchanges per flow step (one neighbour: a message an exchange) and
     # bytes per cell of the face between the two ranks.
     split = [d for d in range(3) if two["process_grid"][d] > 1]
@@ -476,7 +480,7 @@ def coupled_model(a, b, runs, net):
     lat, bw, red = net["sendrecv_latency_s"], net["sendrecv_bandwidth_bytes_per_s"], net["allreduce_s"]
     print(f"model: {b['case']}, {int(N)} cells, {b['count']} bodies, {C:.0f} listed pairs, {steps} flow steps of "
           f"{L:.1f} sub-steps; 1 rank {t1:.2f} s = flow {flow:.2f} + cells' coupling {cellwise:.2f} + bodies' "
-          f"coupling {bodywise:.2f} + DEM {contact + per_body + per_local + dem_rest:.2f} + rest {rest:.2f}; per flow "
+          f"coupling {bodywise:.2f} + DEM {contact + per_body + per_list + per_local + dem_rest:.2f} + rest {rest:.2f}; per flow "
           f"step {msgs['field']:.1f} field and {msgs['multigrid']:.1f} multigrid exchanges, "
           f"{per_face['field']:.1f} and {per_face['multigrid']:.1f} B per face cell; {iters:.1f} Krylov iterations")
     rows = []
@@ -487,10 +491,14 @@ def coupled_model(a, b, runs, net):
         cells = [c / cw for c in row["cell_work_" + cuts]]
         local = [load["bodies"][r] + load["ghosts"][r] for r in range(p)]
         laid = load.get("laid_out", local)
+        if E > 0 and "listed_ghost_elements" in load:
+            listed = [(load["owned_elements"][r] + load["listed_ghost_elements"][r]) / E * B for r in range(p)]
+        else:
+            listed = local
         stages = {"cells": max((flow + cellwise + rest) * cells[r] / N for r in range(p)),
                   "bodies": max(bodywise * laid[r] / B for r in range(p)),
                   "dem": max(contact * load["pairs"][r] / C + (per_body + dem_rest) * load["bodies"][r] / B +
-                             per_local * local[r] / B for r in range(p))}
+                             per_list * listed[r] / B + per_local * local[r] / B for r in range(p))}
         compute = sum(stages.values())
         exchange = 0.0
         if p > 1:

@@ -16,6 +16,7 @@
 #include "core/errors.hpp"
 #include "core/h5_file.hpp"
 #include "solid/rank_load.hpp"
+#include "solid/rigid_rotation.hpp"
 #include "solid/shape.hpp"
 
 namespace tessera {
@@ -139,10 +140,16 @@ int balance_report(const BalanceRequest& rq) {
   // A coupled run lays out each body's tetrahedra on the ranks its nodes reach: each shape's
   // farthest node (SolidPhase's reach), read from the case's shapes.
   std::vector<double> shape_reach;
+  std::vector<ShapeTemplate> shapes;
   if (coupled) {
     const std::string case_dir = std::filesystem::absolute(std::filesystem::path(rq.case_file)).parent_path().string();
-    for (const ShapeTemplate& t : read_shapes(root.section("solid"), case_dir)) shape_reach.push_back(farthest_node(t));
+    shapes = read_shapes(root.section("solid"), case_dir);
+    for (const ShapeTemplate& t : shapes) shape_reach.push_back(farthest_node(t));
   }
+  // And their contact spheres where the bodies are (the pose in columns 15-18): the ghost elements
+  // each rank's list bins (theory T5b).
+  ElementPlaces elements;
+  double element_radius = 0;
   std::vector<WorkSample> work;
   std::vector<Vec3> x;
   std::vector<double> radius, node_reach;
@@ -155,12 +162,24 @@ int balance_report(const BalanceRequest& rq) {
       if (k > shape_reach.size())
         throw InputError("--bodies", rq.bodies_file, "bodies of the case's shapes (one has shape " + std::to_string(k) + ")");
       node_reach.push_back(k == 0 ? rows[i + 3] : shape_reach[k - 1]);
+      elements.first.push_back(elements.x.size());
+      if (k == 0) {
+        elements.x.push_back(x.back());
+        element_radius = std::max(element_radius, rows[i + 3]);
+      } else if (cols >= 19) {
+        const Quaternion q{rows[i + 15], rows[i + 16], rows[i + 17], rows[i + 18]};
+        for (const Vec3& c : shapes[k - 1].spheres) elements.x.push_back(x.back() + q.rotate(c));
+        element_radius = std::max(element_radius, shapes[k - 1].sphere_radius);
+      }
     }
     work.push_back({x.back(), 1.0});
     r_max = std::max(r_max, rows[i + 3]), r_min = std::min(r_min, rows[i + 3]);
   }
   if (work.empty()) throw InputError("--bodies", rq.bodies_file, "a checkpoint with bodies");
   if (skin < 0) skin = 0.5 * r_min;  // DemSettings' default
+  elements.first.push_back(elements.x.size());
+  elements.margin = r_max + element_radius + 3 * skin;  // DemSolver::list_elements
+  const ElementPlaces* places = coupled && cols >= 19 ? &elements : nullptr;
   const double reach = 2 * r_max + skin;
   // The work a run's balance counts (DemSolver::work): 1 plus the listed pairs of each body.
   const std::vector<double> pairs_of = listed_pairs_per_body(x, radius, skin);
@@ -197,6 +216,7 @@ int balance_report(const BalanceRequest& rq) {
     nlohmann::json j{{"bodies", l.bodies}, {"pairs", l.pairs}, {"ghosts", l.ghosts}, {"recv", l.recv},
                      {"total_pairs", l.total_pairs}, {"pair_imbalance", imbalance(l.pairs)}};
     if (!l.laid_out.empty()) j["laid_out"] = l.laid_out;
+    if (!l.owned_elements.empty()) j["owned_elements"] = l.owned_elements, j["listed_ghost_elements"] = l.listed_ghost_elements;
     return j;
   };
 
@@ -241,8 +261,8 @@ int balance_report(const BalanceRequest& rq) {
       balanced_work = plus(balanced_work, balanced_cells);
     }
     const double equal = imbalance(equal_work), balanced = imbalance(balanced_work);
-    const RankLoad equal_load = dem_rank_load(x, radius, lo, hi, dims, equal_cuts(lo, hi, dims), skin, node_reach);
-    const RankLoad balanced_load = dem_rank_load(x, radius, lo, hi, dims, cuts, skin, node_reach);
+    const RankLoad equal_load = dem_rank_load(x, radius, lo, hi, dims, equal_cuts(lo, hi, dims), skin, node_reach, places);
+    const RankLoad balanced_load = dem_rank_load(x, radius, lo, hi, dims, cuts, skin, node_reach, places);
     std::string text;
     for (int d = 0; d < 3; ++d) {
       if (d) text += " |";

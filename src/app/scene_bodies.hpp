@@ -62,6 +62,8 @@ class SceneBodies {
   // flow step's sub-steps (the DEM's work per flow step).
   std::vector<WorkSample> work() const;
   std::size_t halo_bytes_sent() const { return dem_->halo_bytes_sent(); }  // the DEM's ghosts and migrations
+  std::size_t listed_elements() const { return dem_->listed_elements(); }  // the DEM list's last binning (T5b)
+  std::size_t ghost_elements_left_out() const { return dem_->ghost_elements_left_out(); }
   // The busy seconds of the bodies' stages so far (DEM sub-steps, solid fraction, fluid force, pore
   // liquid, correction), this rank.
   double busy_seconds();

@@ -553,21 +553,23 @@ void FlowScene::summarise(nlohmann::json& s) {
     // And what each rank's ghost exchanges sent over the run: the flow's fields and multigrid
     // (messages, bytes), the bodies' (bytes).
     const CellHalo::Traffic fields = flow_->field_traffic(), multigrid = flow_->multigrid_traffic();
-    constexpr int n = 7;
+    constexpr int n = 9;
     const double mine[n] = {double(owned),
                             local,
                             double(fields.messages),
                             fields.bytes,
                             double(multigrid.messages),
                             multigrid.bytes,
-                            bodies_ ? double(bodies_->halo_bytes_sent()) : 0.0};
+                            bodies_ ? double(bodies_->halo_bytes_sent()) : 0.0,
+                            bodies_ ? double(bodies_->listed_elements()) : 0.0,
+                            bodies_ ? double(bodies_->ghost_elements_left_out()) : 0.0};
     std::vector<double> all(n * std::size_t(size));
     MPI_Allgather(mine, n, MPI_DOUBLE, all.data(), n, MPI_DOUBLE, decomp_->comm());
     const char* names[n] = {"cells", "work", "field_halo_messages", "field_halo_bytes", "multigrid_halo_messages",
-                            "multigrid_halo_bytes", "body_halo_bytes"};
+                            "multigrid_halo_bytes", "body_halo_bytes", "listed_elements", "ghost_elements_left_out"};
     nlohmann::json per_rank;
     for (int k = 0; k < n; ++k) {
-      if (k == n - 1 && !bodies_) break;
+      if (k >= 6 && !bodies_) break;  // the bodies' halo and list (T5b: the last binning's)
       per_rank[names[k]] = nlohmann::json::array();
       for (int r = 0; r < size; ++r) {
         const double v = all[std::size_t(n * r + k)];

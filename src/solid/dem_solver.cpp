@@ -367,6 +367,17 @@ ContactElements DemSolver::list_elements() {
   e.key = entities_.element_key().data();
   e.body = entities_.element_body().data();
   e.body_mass = p_.mass.data();
+  // Theory T5b: a ghost element lies beyond the sub-box's face with a neighbour by more than
+  // R_max + r_max + 3 s (R the bodies' reach, r the elements' radius) only where no owned element can
+  // meet it before the next whole build.
+  double r_element = 0;
+  for (const double r : entities_.element_radius()) r_element = std::max(r_element, r);
+  const double margin = r_max_ + r_element + 3.0 * skin_;
+  const Vec3 lo = decomp_.sub_lo(), hi = decomp_.sub_hi();
+  for (int d = 0; d < 3; ++d) {
+    if (decomp_.neighbor(d, 0) != MPI_PROC_NULL) e.near_lo[d] = lo[d] - margin;
+    if (decomp_.neighbor(d, 1) != MPI_PROC_NULL) e.near_hi[d] = hi[d] + margin;
+  }
   return e;
 }
 

@@ -58,16 +58,26 @@ int NeighborList::cell_coord(double x, int d) const {
 void NeighborList::bin(const ContactElements& p, double skin) {
   const std::size_t n = p.size;
   double r_min = std::numeric_limits<double>::infinity(), r_max = 0;
+  for (std::size_t i = 0; i < n; ++i) r_min = std::min(r_min, p.radius[i]), r_max = std::max(r_max, p.radius[i]);
+  r_ref_ = std::min(r_max, 2.0 * r_min);
+  // The small ghost elements far from the sub-box are left out (ContactElements::near; the large
+  // ones, few, are always kept), and the grid spans the others only.
   Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  cell_of_.resize(n);
+  left_out = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    r_min = std::min(r_min, p.radius[i]);
-    r_max = std::max(r_max, p.radius[i]);
+    cell_of_[i] = p.radius[i] > r_ref_ || p.near(i) ? 0 : kFar;
+    if (cell_of_[i] == kFar) {
+      ++left_out;
+      continue;
+    }
     for (int d = 0; d < 3; ++d) {
       lo[d] = std::min(lo[d], p.x[p.stride * i + d]);
       hi[d] = std::max(hi[d], p.x[p.stride * i + d]);
     }
   }
-  r_ref_ = std::min(r_max, 2.0 * r_min);
+  binned = n - left_out;
+  if (binned == 0) lo = hi = Vec3{};
   double h = 2.0 * r_ref_ + skin;
   // Keep the grid at most ~4 cells per body (a body flung far away must not blow up memory).
   for (;;) {
@@ -76,17 +86,17 @@ void NeighborList::bin(const ContactElements& p, double skin) {
       nc_[d] = std::max(1, static_cast<int>((hi[d] - lo[d]) / h) + 1);
       cells *= nc_[d];
     }
-    if (cells <= 4.0 * static_cast<double>(n) + 64) break;
+    if (cells <= 4.0 * static_cast<double>(binned) + 64) break;
     h *= 1.5;
   }
   lo_ = lo;
   inv_h_ = 1.0 / h;
   const std::size_t ncell = static_cast<std::size_t>(nc_[0]) * nc_[1] * nc_[2];
   cell_start_.assign(ncell + 1, 0);
-  cell_of_.resize(n);
   cell_items_.resize(n);
   large_.clear();
   for (std::size_t i = 0; i < n; ++i) {
+    if (cell_of_[i] == kFar) continue;
     if (p.radius[i] > r_ref_) {
       large_.push_back(static_cast<std::int32_t>(i));
       cell_of_[i] = -1;
@@ -268,8 +278,12 @@ bool NeighborList::relist(const ContactElements& p, double skin, const std::vect
   // others in the cells, within skin/2 of where they were binned (none of them is stale). When the
   // moved ones are many, all are binned again.
   if (moved_.size() != n || 8 * (moved_list_.size() + stale_elements) > n) bin(p, skin);
+  // A stale element left out at the bin joins the moved ones once it is near the sub-box; until then
+  // no owned element can reach it, and it searches nothing (theory T5b).
+  auto searched = [&](std::size_t a) { return cell_of_[a] != kFar || moved_[a] || p.near(a); };
   for (std::size_t a = 0; a < n; ++a)
-    if (stale_el_[a] && !moved_[a] && cell_of_[a] >= 0) moved_[a] = 1, moved_list_.push_back(static_cast<std::int32_t>(a));
+    if (stale_el_[a] && !moved_[a] && cell_of_[a] != -1 && searched(a))
+      moved_[a] = 1, moved_list_.push_back(static_cast<std::int32_t>(a));
   auto cell_of = [&](const double* x) {
     return (cell_coord(x[2], 2) * nc_[1] + cell_coord(x[1], 1)) * nc_[0] + cell_coord(x[0], 0);
   };
@@ -291,7 +305,7 @@ bool NeighborList::relist(const ContactElements& p, double skin, const std::vect
     }
   };
   for (std::size_t a = 0; a < n; ++a) {
-    if (!stale_el_[a]) continue;
+    if (!stale_el_[a] || !searched(a)) continue;
     const double* xa = &p.x[p.stride * a];
     const double reach = p.radius[a] + r_ref_ + skin + fresh_travel, binned_reach = reach + 0.5 * skin;
     int c0[3], c1[3], m0[3], m1[3];

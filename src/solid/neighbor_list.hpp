@@ -14,6 +14,7 @@
 // independent of the rank count (tests/mpi/test_rank_independence.cpp).
 #pragma once
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -33,6 +34,16 @@ struct ContactElements {
   const std::int64_t* key = nullptr;   // canonical, unique
   const std::int32_t* body = nullptr;  // local body per element; nullptr: element i is body i
   const double* body_mass = nullptr;
+  // Ghost elements (index >= owned) whose place lies outside [near_lo, near_hi] are not listed: no
+  // owned element can come within reach of them before the next whole build (DemSolver sets the
+  // box, theory T5b). The default box holds everything.
+  Vec3 near_lo{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL}, near_hi{HUGE_VAL, HUGE_VAL, HUGE_VAL};
+  bool near(std::size_t i) const {
+    if (i < owned) return true;
+    for (int d = 0; d < 3; ++d)
+      if (!(x[stride * i + d] >= near_lo[d] && x[stride * i + d] <= near_hi[d])) return false;
+    return true;
+  }
 };
 
 // A store's bodies as elements (each body one element).
@@ -64,6 +75,8 @@ class NeighborList {
   std::vector<double> meff;     // m_a m_b / (m_a + m_b), constant while listed
 
   std::size_t builds = 0, relists = 0;
+  // Elements the last bin() left out (ghosts outside the near box), and those it binned.
+  std::size_t left_out = 0, binned = 0;
 
  private:
   struct Candidate {
@@ -73,7 +86,8 @@ class NeighborList {
   std::vector<Candidate> candidates_, sorted_;  // sorted_: the radix sort's other buffer
   std::vector<PairKey> previous_keys_;
   std::vector<double> previous_history_;
-  std::vector<std::int32_t> cell_start_, cell_items_, cell_of_, large_;
+  std::vector<std::int32_t> cell_start_, cell_items_, cell_of_, large_;  // cell_of_: -1 large, kFar left out
+  static constexpr std::int32_t kFar = -2;
   // list_all(): the binned elements' places and radii (x, y, z, r) and bodies in cell_items_'
   // order, so that the half stencil reads them in sequence rather than scattered over the arrays.
   std::vector<std::array<double, 4>> packed_;

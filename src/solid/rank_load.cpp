@@ -43,7 +43,7 @@ std::vector<double> listed_pairs_per_body(const std::vector<Vec3>& x, const std:
 
 RankLoad dem_rank_load(const std::vector<Vec3>& x, const std::vector<double>& radius, const Vec3& lo, const Vec3& hi,
                        std::array<int, 3> dims, const CutPlanes& interior, double skin,
-                       const std::vector<double>& node_reach) {
+                       const std::vector<double>& node_reach, const ElementPlaces* elements) {
   const std::size_t ranks = static_cast<std::size_t>(dims[0]) * dims[1] * dims[2];
   RankLoad load;
   load.bodies.assign(ranks, 0.0);
@@ -52,6 +52,7 @@ RankLoad dem_rank_load(const std::vector<Vec3>& x, const std::vector<double>& ra
   load.recv.assign(ranks, {});
   const bool lays_out = !node_reach.empty();
   if (lays_out) load.laid_out.assign(ranks, 0.0);
+  if (elements) load.owned_elements.assign(ranks, 0.0), load.listed_ghost_elements.assign(ranks, 0.0);
   if (x.empty()) return load;
   std::array<std::vector<double>, 3> planes;  // dims[d] + 1 planes per direction
   for (int d = 0; d < 3; ++d) {
@@ -71,6 +72,7 @@ RankLoad dem_rank_load(const std::vector<Vec3>& x, const std::vector<double>& ra
     owner[a] = static_cast<std::size_t>(g);
     load.bodies[owner[a]] += 1;
     if (lays_out) load.laid_out[owner[a]] += 1;
+    if (elements) load.owned_elements[owner[a]] += static_cast<double>(elements->first[a + 1] - elements->first[a]);
     // Ghosts: per direction, the slab itself or a neighbour across a face within the reach; every
     // combination but the body's own cell is a rank holding a copy.
     const double reach = radius[a] + r_max + skin;
@@ -98,6 +100,17 @@ RankLoad dem_rank_load(const std::vector<Vec3>& x, const std::vector<double>& ra
               d2 += out * out;
             }
             if (d2 <= node_reach[a] * node_reach[a]) load.laid_out[r] += 1;
+          }
+          if (elements) {  // its elements within the margin of the rank's faces with a neighbour
+            for (std::size_t e = elements->first[a]; e < elements->first[a + 1]; ++e) {
+              bool near = true;
+              for (int d = 0; d < 3 && near; ++d) {
+                const auto i = static_cast<std::size_t>(t[d]);
+                if (t[d] > 0 && elements->x[e][d] < planes[d][i] - elements->margin) near = false;
+                if (t[d] + 1 < dims[d] && elements->x[e][d] > planes[d][i + 1] + elements->margin) near = false;
+              }
+              load.listed_ghost_elements[r] += near;
+            }
           }
           // It arrives in the last direction in which it moves (x, then y, then z).
           for (int d = 2; d >= 0; --d)

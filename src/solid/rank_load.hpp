@@ -27,6 +27,10 @@ struct RankLoad {
   // Ghosts each rank receives in each of the six swaps (direction d, from the low / high side):
   // recv[rank][2 d + side]. A swap moves them every step (x, v, omega).
   std::vector<std::array<double, 6>> recv;
+  // Shaped bodies' contact spheres, when their places are given: each rank's owned elements and the
+  // ghosts' elements its list bins (those within the margin of its faces with a neighbour, theory
+  // T5b; DemSolver's listed_elements() is their sum at a whole list).
+  std::vector<double> owned_elements, listed_ghost_elements;
   double total_pairs = 0;  // distinct listed pairs
 };
 
@@ -34,11 +38,19 @@ struct RankLoad {
 // run's load balance counts (DemSolver::work).
 std::vector<double> listed_pairs_per_body(const std::vector<Vec3>& x, const std::vector<double>& radius, double skin);
 
+// Each body's contact spheres in the world frame: body b's are x[first[b]] .. x[first[b + 1] - 1];
+// margin: R_max + r_max + 3 s (theory T5b).
+struct ElementPlaces {
+  std::vector<Vec3> x;
+  std::vector<std::size_t> first;
+  double margin = 0;
+};
+
 // x: body centres, radius: their radii; dims and interior cuts as Decomposition's; skin the
 // neighbour list's; node_reach: each body's farthest tetrahedron node from its centre (a coupled
-// run's bodies), or empty.
+// run's bodies), or empty; elements: the bodies' contact spheres, or null.
 RankLoad dem_rank_load(const std::vector<Vec3>& x, const std::vector<double>& radius, const Vec3& lo, const Vec3& hi,
                        std::array<int, 3> dims, const CutPlanes& interior, double skin,
-                       const std::vector<double>& node_reach = {});
+                       const std::vector<double>& node_reach = {}, const ElementPlaces* elements = nullptr);
 
 }  // namespace tessera

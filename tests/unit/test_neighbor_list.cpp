@@ -301,5 +301,98 @@ TEST(NeighborList, ElementsOfBodiesEqualBruteForce) {
   EXPECT_EQ(std::vector<PairKey>(expected.begin(), expected.end()), list.keys);
 }
 
+// Theory T5b: ghost elements beyond the near box are left out of the cells, and the list is the same.
+// A ghost body left out at the bin that comes, relisted again and again (each time by less than s/2,
+// as a run's ghosts do), within reach of owned elements is found, both from its own search and from
+// a stale owned element's (the moved elements' cells).
+TEST(NeighborList, GhostsLeftOutFarFromTheSubBoxAreFoundWhenTheyComeNear) {
+  std::uint64_t z = 4242;
+  auto rnd = [&z] {
+    z = z * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(z >> 11) * 0x1.0p-53;
+  };
+  const std::size_t per_body = 12, owned_bodies = 200, bodies = 320;
+  const double r = 2e-4, skin = 8e-5, L = 0.006, face = 0.005;
+  const double reach = 4e-4 * std::sqrt(3.0) + r, margin = reach + r + 3 * skin;  // DemSolver's rule
+  std::vector<double> x, radius, mass(bodies, 1.0);
+  std::vector<std::int64_t> key;
+  std::vector<std::int32_t> body;
+  for (std::size_t i = 0; i < bodies; ++i) {  // owned centres in x < face, ghosts' beyond it
+    const double c[3] = {i < owned_bodies ? face * rnd() : face + 3e-3 * rnd(), L * rnd(), L * rnd()};
+    for (std::size_t k = 0; k < per_body; ++k) {
+      for (int d = 0; d < 3; ++d) x.push_back(c[d] + 8e-4 * (rnd() - 0.5));
+      radius.push_back(r);
+      key.push_back(static_cast<std::int64_t>(((i * 7919) % 1009) * per_body + k));
+      body.push_back(static_cast<std::int32_t>(i));
+    }
+  }
+  ContactElements e;
+  e.size = bodies * per_body;
+  e.owned = owned_bodies * per_body;
+  e.x = x.data();
+  e.radius = radius.data();
+  e.key = key.data();
+  e.body = body.data();
+  e.body_mass = mass.data();
+  auto brute = [&] {
+    std::vector<PairKey> out;
+    for (std::size_t a = 0; a < e.owned; ++a)
+      for (std::size_t b = a + 1; b < e.size; ++b) {
+        double r2 = 0;
+        for (int d = 0; d < 3; ++d) r2 += (x[3 * a + d] - x[3 * b + d]) * (x[3 * a + d] - x[3 * b + d]);
+        if (r2 < (2 * r + skin) * (2 * r + skin) && body[a] != body[b]) out.push_back(pair_key(key[a], key[b]));
+      }
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  NeighborList all, near;
+  all.build(e, skin, {});
+  e.near_hi.x = face + margin;
+  near.build(e, skin, {});
+  EXPECT_EQ(all.left_out, 0u);
+  EXPECT_GT(near.left_out, e.size / 8);  // a third of the ghost elements
+  EXPECT_EQ(near.keys, all.keys);
+  EXPECT_EQ(near.keys, brute());
+  // A ghost body left out whole at the bin, of a high key (its owned partners search it from their
+  // side), walks towards the owned ones, 0.4 s a relist.
+  std::size_t g = 0;
+  for (std::size_t i = owned_bodies; i < bodies; ++i)
+    if (x[3 * per_body * i] > face + margin + 4e-4 && (g == 0 || key[per_body * i] > key[per_body * g])) g = i;
+  ASSERT_GT(g, 0u);
+  std::vector<char> stale(bodies, 0);
+  std::vector<double> travel(bodies, 0.0);
+  stale[g] = 1;
+  int steps = 0;
+  while (x[3 * per_body * g] > face - 1e-4) {
+    for (std::size_t k = 0; k < per_body; ++k) x[3 * (per_body * g + k)] -= 0.4 * skin;
+    travel[g] = 0.4 * skin;
+    EXPECT_FALSE(near.relist(e, skin, stale, travel));
+    ++steps;
+  }
+  EXPECT_GT(steps, 20);
+  const auto found = brute();
+  std::size_t with_g = 0;
+  for (const auto k : found) with_g += (k >> 32) / per_body == static_cast<std::uint64_t>(key[per_body * g]) / per_body ||
+                                       (k & 0xffffffffULL) / per_body == static_cast<std::uint64_t>(key[per_body * g]) / per_body;
+  EXPECT_GT(with_g, 3u);  // it has owned partners now
+  EXPECT_EQ(near.keys, found);
+  // Now owned bodies near it are stale too: each pair from the lower key's side.
+  std::size_t stale_owned = 0;
+  for (std::size_t i = 0; i < owned_bodies; ++i) {
+    double r2 = 0;
+    for (int d = 0; d < 3; ++d) r2 += std::pow(x[3 * per_body * i + d] - x[3 * per_body * g + d], 2);
+    if (r2 < 1.5e-3 * 1.5e-3) stale[i] = 1, ++stale_owned;
+  }
+  ASSERT_GT(stale_owned, 2u);
+  ASSERT_LT(8 * (stale_owned + 2) * per_body, e.size);  // not all binned again
+  for (std::size_t i = 0; i < bodies; ++i)
+    if (stale[i] && i != g)
+      for (std::size_t k = 0; k < per_body; ++k) x[3 * (per_body * i + k) + 1] += 1e-5;
+  for (std::size_t i = 0; i < bodies; ++i) travel[i] = stale[i] ? 1e-5 : 0.0;
+  travel[g] = 0;
+  EXPECT_FALSE(near.relist(e, skin, stale, travel));
+  EXPECT_EQ(near.keys, brute());
+}
+
 }  // namespace
 }  // namespace tessera

@@ -208,13 +208,35 @@ TEST(SolidFraction, EachRankLaysOutTheBodiesTheScalingModelCounts) {
   const ShapeTemplate& t = rig.dem->shapes()[0];
   const std::vector<double> radius(xs.size(), t.bounding_radius), reach(xs.size(), farthest_node(t));
   const auto& dims = rig.decomp->dims();
+  // And the contact spheres the DEM's list bins (theory T5b): the owned ones and the ghosts' near a face.
+  ElementPlaces elements;
+  elements.margin = rig.dem->max_radius() + t.sphere_radius + 3 * rig.dem->skin();
+  for (std::size_t b = 0; b < xs.size(); ++b) {
+    elements.first.push_back(elements.x.size());
+    const Quaternion q = turn(static_cast<int>(b));
+    const double qn = std::sqrt(q.norm2());
+    const Quaternion qu{q.w / qn, q.x / qn, q.y / qn, q.z / qn};
+    for (const Vec3& c : t.spheres) elements.x.push_back(xs[b] + qu.rotate(c));
+  }
+  elements.first.push_back(elements.x.size());
   const RankLoad load = dem_rank_load(xs, radius, {0, 0, 0}, {kBox, kBox, kBox}, dims, rig.decomp->interior_cuts(),
-                                      rig.dem->skin(), reach);
+                                      rig.dem->skin(), reach, &elements);
   const auto& c = rig.decomp->coords();
   const auto me = static_cast<std::size_t>(c[0] + dims[0] * (c[1] + dims[1] * c[2]));
   EXPECT_EQ(load.bodies[me], static_cast<double>(rig.dem->particles().owned));
   EXPECT_EQ(load.ghosts[me], static_cast<double>(rig.dem->particles().ghosts));
   EXPECT_EQ(load.laid_out[me], static_cast<double>(solid.layouts_computed() - solid.layouts_elsewhere()));
+  EXPECT_EQ(load.owned_elements[me] + load.listed_ghost_elements[me], static_cast<double>(rig.dem->listed_elements()));
+  const double ghost_elements = static_cast<double>(rig.dem->particles().ghosts * t.spheres.size());
+  EXPECT_EQ(ghost_elements - load.listed_ghost_elements[me], static_cast<double>(rig.dem->ghost_elements_left_out()));
+  if (load.ghosts.size() > 1) {  // some ghost elements listed, some left out
+    double listed = 0, all = 0;
+    for (std::size_t r = 0; r < load.ghosts.size(); ++r)
+      listed += load.listed_ghost_elements[r], all += load.ghosts[r] * static_cast<double>(t.spheres.size());
+    EXPECT_GT(listed, 0.1 * all);
+    EXPECT_LT(listed, 0.9 * all);
+    if (root()) std::printf("%.0f of %.0f ghost elements listed\n", listed, all);
+  }
   // Not vacuous on a split grid: some ghosts are laid out, some are not.
   double ghosts = 0, laid_ghosts = 0;
   for (std::size_t r = 0; r < load.ghosts.size(); ++r)
