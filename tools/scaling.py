@@ -3,7 +3,8 @@
 each run's summary.json into speed-up, parallel efficiency and the time per phase (the seeds' Fig.
 10 / Fig. 14 / Table 3 style).
 
-  tools/scaling.py run CASE.yaml --ranks 1,2 [--repeat 3] [--set key=value ...] [--out runs/scaling]
+  tools/scaling.py run CASE.yaml --ranks 1,2 [--repeat 3] [--packed K] [--set key=value ...] [--out runs/scaling]
+        --packed K: each 1-rank run is K copies at once, so that its per-core rate is that of a busy node
   tools/scaling.py slurm CASE.yaml --ranks 1,2,4,8,16 [--time 02:00:00] [--partition P] [--out D]
         writes D/scaling_P.sbatch per rank count and D/submit.sh (sbatch each); then `report`
   tools/scaling.py report --out D [--png FILE]
@@ -77,12 +78,23 @@ def run(a):
                OMPI_MCA_rmaps_base_oversubscribe="1")
     for rep in range(a.repeat):
         for p in a.ranks:
-            out = os.path.join(a.out, f"P{p}_r{rep}")
-            if os.path.exists(os.path.join(out, "summary.json")):
+            # --packed K: the 1-rank run as K copies at once (P1_rR_cK), each core of a K-core node busy
+            # as in the runs on many ranks: the per-core rate the model scales from (memory bandwidth
+            # and caches are shared; docs/performance.md, 2026-12-05).
+            copies = a.packed if p == 1 and a.packed > 1 else 1
+            outs = [os.path.join(a.out, f"P{p}_r{rep}" + (f"_c{c}" if copies > 1 else "")) for c in range(copies)]
+            if all(os.path.exists(os.path.join(out, "summary.json")) for out in outs):
                 continue
-            cmd = ["mpirun", "-n", str(p), TESSERA] + tessera_args(a.case, a.set, out)
-            print(" ".join(shlex.quote(c) for c in cmd), flush=True)
-            subprocess.run(cmd, check=True, env=env, stdout=subprocess.DEVNULL)
+            procs = []
+            for out in outs:
+                # Copies side by side: each mpirun would bind its rank to the first core.
+                bind = ["--bind-to", "none"] if copies > 1 else []
+                cmd = ["mpirun", "-n", str(p)] + bind + [TESSERA] + tessera_args(a.case, a.set, out)
+                print(" ".join(shlex.quote(c) for c in cmd), flush=True)
+                procs.append(subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL))
+            for proc in procs:
+                if proc.wait() != 0:
+                    sys.exit(f"scaling: a run failed ({proc.args})")
     report(a)
 
 
@@ -528,6 +540,8 @@ def main():
         p.add_argument("--png")
         if mode == "run":
             p.add_argument("--repeat", type=int, default=1)
+            p.add_argument("--packed", type=int, default=1,
+                           help="run the 1-rank case as this many copies at once (all cores busy)")
         else:
             p.add_argument("--time", default="02:00:00")
             p.add_argument("--partition")
