@@ -11,6 +11,9 @@ each run's summary.json into speed-up, parallel efficiency and the time per phas
   tools/scaling.py network --out D          (mpirun -n 2; needs python3-mpi4py) this machine's MPI costs,
         t = latency + bytes / bandwidth fitted over 8 B - 1 MB for the all-gather and for the halo's
         MPI_Sendrecv, and a two-double all-reduce, in D/network.json
+  tools/scaling.py iterations CASE.yaml --ranks 4,16,25,64,100 [--steps 3] --out D
+        the Poisson's iterations per flow step on P ranks (oversubscribed: counts, not times) in
+        D/iterations.json; the coupled model scales the Poisson's time and messages by them
   tools/scaling.py model CASE.yaml --ranks 2,4,16,64 --out D [--bodies CHECKPOINT] [--cuts balanced] [--png F] [--set ...]
         predicts the loop time on P ranks from D's 1-rank runs, the work per rank that `tessera balance`
         counts for P on one process, and D/network.json; where D holds measured runs on P ranks it
@@ -96,6 +99,31 @@ def run(a):
                 if proc.wait() != 0:
                     sys.exit(f"scaling: a run failed ({proc.args})")
     report(a)
+
+
+def iterations(a):
+    """The Poisson's CG iterations per flow step on each rank count (the multigrid's levels follow the
+    ranks' blocks, so they change with P): a few flow steps on P ranks, oversubscribed where P exceeds
+    the cores (their times mean nothing; their counts do), into D/iterations.json."""
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1")
+    path = os.path.join(a.out, "iterations.json")
+    table = json.load(open(path)) if os.path.exists(path) else {}
+    for p in sorted(set([1] + a.ranks)):
+        out = os.path.join(a.out, f"iterations_P{p}")
+        sets = a.set + [f"run.max_steps={a.steps}", "output.checkpoint_interval=0"]
+        cmd = ["mpirun", "-n", str(p), "--bind-to", "none", TESSERA] + tessera_args(a.case, sets, out)
+        print(" ".join(shlex.quote(c) for c in cmd), flush=True)
+        subprocess.run(cmd, check=True, env=env, stdout=subprocess.DEVNULL)
+        s = json.load(open(os.path.join(out, "summary.json")))
+        table[str(p)] = {"iterations_per_step": s["poisson"]["iterations_per_step"],
+                         "coarsest_cells": s["poisson"].get("coarsest_cells", 0),
+                         "process_grid": s.get("process_grid"), "steps": s["steps"]}
+        print(f"{p} ranks {s.get('process_grid')}: {table[str(p)]['iterations_per_step']:.2f} iterations a step, "
+              f"the coarsest level {table[str(p)]['coarsest_cells']} cells", flush=True)
+    os.makedirs(a.out, exist_ok=True)
+    with open(path, "w") as f:
+        json.dump(table, f, indent=1)
 
 
 def slurm(a):
@@ -443,7 +471,10 @@ def coupled_model(a, b, runs, net):
     from the 2-rank run's per-rank traffic; at P each exchange pays one latency per split direction
     plus the busiest rank's face bytes over the bandwidth), the Poisson's 3 reductions per Krylov
     iteration, and per DEM sub-step dem_model's swaps and list check, plus 6 swaps of the bodies' sums
-    per flow step (C3's loads, C4a's sums and velocities, C7's moves, the ghosts' refresh)."""
+    per flow step (C3's loads, C4a's sums and velocities, C7's moves, the ghosts' refresh). Where
+    D/iterations.json counts the Poisson's iterations on P ranks, the Poisson's time, its reductions
+    and the multigrid's exchanges scale by their ratio to 1 rank's, and each cycle's coarsest-level
+    LU adds an all-gather of that level."""
     if "sendrecv_latency_s" not in net:
         sys.exit("scaling model: network.json predates the point-to-point measurement; run `network` again")
     if 2 not in runs:
@@ -457,6 +488,18 @@ def coupled_model(a, b, runs, net):
 
     L = one["coupling"]["substeps_per_flow_step"]
     flow = avg("flow")
+    poisson = avg("flow/poisson")
+    # The Poisson's iterations at P against 1 rank (`iterations`: the multigrid's levels follow the
+    # blocks); at a P not counted, the largest counted P below it (a lower bound).
+    it_path = os.path.join(a.out, "iterations.json")
+    counted = {int(k): v for k, v in json.load(open(it_path)).items()} if os.path.exists(it_path) else {}
+
+    def iteration_ratio(p):
+        below = [q for q in counted if q <= p]
+        if 1 not in counted or not below:
+            return 1.0, None
+        q = max(below)
+        return counted[q]["iterations_per_step"] / counted[1]["iterations_per_step"], counted[q]
     cellwise = avg("pore_liquid", "correction")
     bodywise = avg("solid_fraction", "fluid_force")
     contact = avg("dem/contact_forces")
@@ -507,7 +550,8 @@ def coupled_model(a, b, runs, net):
             listed = [(load["owned_elements"][r] + load["listed_ghost_elements"][r]) / E * B for r in range(p)]
         else:
             listed = local
-        stages = {"cells": max((flow + cellwise + rest) * cells[r] / N for r in range(p)),
+        ratio, count = iteration_ratio(p)
+        stages = {"cells": max((flow + (ratio - 1) * poisson + cellwise + rest) * cells[r] / N for r in range(p)),
                   "bodies": max(bodywise * laid[r] / B for r in range(p)),
                   "dem": max(contact * load["pairs"][r] / C + (per_body + dem_rest) * load["bodies"][r] / B +
                              per_list * listed[r] / B + per_local * local[r] / B for r in range(p))}
@@ -517,14 +561,20 @@ def coupled_model(a, b, runs, net):
             # The busiest rank's face along each split direction (cells of the other two directions).
             face = {d: max(slabs[(d + 1) % 3][i] * slabs[(d + 2) % 3][j] for i in range(dims[(d + 1) % 3])
                            for j in range(dims[(d + 2) % 3])) for d in range(3) if dims[d] > 1}
-            halo = sum(msgs[k] * sum(lat + per_face[k] * f / bw for f in face.values()) for k in ("field", "multigrid"))
-            reductions = 3 * iters * math.ceil(math.log2(p)) * red
+            halo = sum(msgs[k] * (ratio if k == "multigrid" else 1.0) * sum(lat + per_face[k] * f / bw for f in face.values())
+                       for k in ("field", "multigrid"))
+            reductions = 3 * iters * ratio * math.ceil(math.log2(p)) * red
+            if count and count.get("coarsest_cells") and "latency_s" in net:
+                # The coarsest level's LU on every rank: one all-gather of its right-hand side a cycle.
+                gather = math.ceil(math.log2(p)) * net["latency_s"] + 8.0 * count["coarsest_cells"] / net["bandwidth_bytes_per_s"]
+                reductions += (iters * ratio + 1) * gather
             swaps = sum(2 * (lat + 72.0 * max(load["recv"][r][2 * d + s] for r in range(p) for s in range(2)) / bw)
                         for d in face)
             dem = L * (math.ceil(math.log2(p)) * red + swaps) + 6 * swaps
             exchange = steps * (halo + reductions + dem)
         rows.append({"ranks": p, "grid": dims, "compute": compute, "exchange": exchange, "stages": stages,
-                     "predicted": compute + exchange, "measured": median_loop(runs, p)})
+                     "predicted": compute + exchange, "measured": median_loop(runs, p), "iteration_ratio": ratio,
+                     "iterations_from": None if count is None else count.get("process_grid")})
     return rows
 
 
@@ -545,6 +595,12 @@ def main():
         else:
             p.add_argument("--time", default="02:00:00")
             p.add_argument("--partition")
+    p = sub.add_parser("iterations")
+    p.add_argument("case")
+    p.add_argument("--ranks", type=lambda s: [int(x) for x in s.split(",")], required=True)
+    p.add_argument("--steps", type=int, default=3)
+    p.add_argument("--set", action="append", default=[])
+    p.add_argument("--out", default="runs/scaling")
     p = sub.add_parser("report")
     p.add_argument("--out", default="runs/scaling")
     p.add_argument("--png")
@@ -561,7 +617,7 @@ def main():
     p.add_argument("--set", action="append", default=[])
     p.add_argument("--out", default="runs/scaling")
     a = ap.parse_args()
-    {"run": run, "slurm": slurm, "report": report, "network": network, "model": model}[a.mode](a)
+    {"run": run, "slurm": slurm, "report": report, "network": network, "model": model, "iterations": iterations}[a.mode](a)
 
 
 if __name__ == "__main__":

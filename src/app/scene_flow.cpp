@@ -537,7 +537,8 @@ void FlowScene::summarise(nlohmann::json& s) {
   s["cells"] = cells;
   s["poisson"] = {{"solver", flow_->poisson_description()},
                   {"iterations_per_step", steps_run ? double(poisson_iterations_) / steps_run : 0.0},
-                  {"max_iterations", max_iterations_}};
+                  {"max_iterations", max_iterations_},
+                  {"coarsest_cells", flow_->poisson_coarsest_cells()}};
   s["dt_limits"] = limits_;
   s["cell_steps_per_second_per_core"] =
       double(cells) * steps_run / std::max(s["loop_seconds"].get<double>(), 1e-9) / decomp_->size();

@@ -28,6 +28,7 @@
 // default).
 #pragma once
 #include <petscdmda.h>
+#include <petscksp.h>
 
 #include <array>
 #include <memory>
@@ -40,7 +41,9 @@ namespace tessera {
 
 class CellMultigrid {
  public:
-  CellMultigrid(const FluidGrid& grid, int pre_sweeps = 2, int post_sweeps = 2, int coarse_sweeps = 20);
+  // coarse_direct: the coarsest level solved exactly (LU, every rank a copy); else coarse_sweeps.
+  CellMultigrid(const FluidGrid& grid, int pre_sweeps = 2, int post_sweeps = 2, int coarse_sweeps = 20,
+                bool coarse_direct = true);
   ~CellMultigrid();
   CellMultigrid(const CellMultigrid&) = delete;
   CellMultigrid& operator=(const CellMultigrid&) = delete;
@@ -54,6 +57,7 @@ class CellMultigrid {
   // coefficients pressure_poisson.cpp assembles for PETSc preconditioners).
   void apply_operator(Vec x, Vec y);
   int levels() const { return int(levels_.size()); }
+  long coarsest_cells() const;
   double exchange_seconds() const { return exchange_seconds_; }  // ghost exchanges, all levels
   CellHalo::Traffic halo_traffic() const;                          // what they sent, all levels
 
@@ -91,9 +95,24 @@ class CellMultigrid {
   // The coarser level's correction added to each of its aggregate's cells (prolongation).
   void prolong(Level& C, Level& L);
   void cycle(std::size_t l);
+  // The coarsest level's exact solve (theory F9a): its operator (the V-cycle's single-precision
+  // coefficients, in double) gathered to every rank in the level's natural order and factored by
+  // LU there, the right-hand side gathered the same way: the same arithmetic on any rank count.
+  void assemble_coarsest();
+  void solve_coarsest();
+  // Every rank's block of the coarsest level (s, m per direction), and a gathered field in the
+  // blocks' order, to natural order.
+  std::vector<int> coarse_blocks_, coarse_counts_, coarse_displs_;
+  std::vector<double> coarse_mine_, coarse_all_;
+  template <class F>
+  void for_natural(F&& fn) const;  // fn(natural index, index in coarse_all_), block by block
 
   const FluidGrid& grid_;
   int pre_, post_, coarse_;
+  bool coarse_direct_;
+  Mat coarse_A_ = nullptr;
+  KSP coarse_ksp_ = nullptr;
+  Vec coarse_b_ = nullptr, coarse_x_ = nullptr;
   double exchange_seconds_ = 0;
   std::vector<std::unique_ptr<Level>> levels_;
 };

@@ -56,6 +56,7 @@ FlowSettings FlowSettings::from_config(const ConfigNode& fluid) {
       s.poisson.pre_sweeps = int(mg->integer("pre_sweeps", 1, 20, s.poisson.pre_sweeps));
       s.poisson.post_sweeps = int(mg->integer("post_sweeps", 1, 20, s.poisson.post_sweeps));
       s.poisson.coarse_sweeps = int(mg->integer("coarse_sweeps", 2, 1000, s.poisson.coarse_sweeps));
+      s.poisson.coarse_direct = mg->choice("coarse_solver", {"direct", "sweeps"}, "direct") == "direct";
       if (s.poisson.pre_sweeps != s.poisson.post_sweeps)
         mg->fail("post_sweeps", "equal to pre_sweeps (CG needs a symmetric preconditioner)");
     }

@@ -191,6 +191,7 @@ class FlowSolver {
     return timers_;
   }
   std::string poisson_description() const { return poisson_->description(); }
+  long poisson_coarsest_cells() const { return poisson_->coarsest_cells(); }
   // What this rank's ghost exchanges sent since the start (messages, bytes): the fields' and the
   // multigrid's (PETSc's own traffic in the Krylov solver is not counted).
   CellHalo::Traffic field_traffic() const { return grid_->halo_traffic(); }

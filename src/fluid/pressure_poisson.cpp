@@ -23,7 +23,8 @@ PressurePoisson::PressurePoisson(const FluidGrid& grid, const PoissonSettings& s
   if (settings_.geometric_multigrid) {
     // Matrix-free: the multigrid's finest level applies the operator from its face coefficients.
     multigrid_ =
-        std::make_unique<CellMultigrid>(grid, settings_.pre_sweeps, settings_.post_sweeps, settings_.coarse_sweeps);
+        std::make_unique<CellMultigrid>(grid, settings_.pre_sweeps, settings_.post_sweeps, settings_.coarse_sweeps,
+                                        settings_.coarse_direct);
     PetscInt local, global;
     Vec probe;
     check(DMCreateGlobalVector(dm, &probe), "DMCreateGlobalVector");
@@ -100,9 +101,12 @@ std::string PressurePoisson::description() const {
   std::string s = std::string(kt) + " + " + pt;
   if (std::string(pt) == "hypre") s += " (BoomerAMG)";
   if (std::string(pt) == "shell" && multigrid_)
-    s = std::string(kt) + " + geometric multigrid (" + std::to_string(multigrid_->levels()) + " levels)";
+    s = std::string(kt) + " + geometric multigrid (" + std::to_string(multigrid_->levels()) + " levels, the coarsest " +
+        std::to_string(multigrid_->coarsest_cells()) + " cells by " + (settings_.coarse_direct ? "LU)" : "sweeps)");
   return s;
 }
+
+long PressurePoisson::coarsest_cells() const { return multigrid_ ? multigrid_->coarsest_cells() : 0; }
 
 void PressurePoisson::assemble(const std::vector<double>& rho) {
   const FluidGrid& g = grid_;

@@ -34,6 +34,7 @@ struct PoissonSettings {
   int reuse_preconditioner = 1;     // rebuild the preconditioner every N solves (1 = every solve)
   bool geometric_multigrid = true;  // false: a PETSc preconditioner (options decide which)
   int pre_sweeps = 2, post_sweeps = 2, coarse_sweeps = 20;  // the V-cycle's smoothing
+  bool coarse_direct = true;  // the coarsest level solved by LU (else coarse_sweeps; theory F9a)
 };
 
 struct PoissonStats {
@@ -57,6 +58,7 @@ class PressurePoisson {
   PoissonStats solve(const std::vector<double>& rhs, std::vector<double>& p);
   bool singular() const { return singular_; }
   std::string description() const;  // KSP and PC types, for the log
+  long coarsest_cells() const;       // the multigrid's coarsest level (0 without it)
   double exchange_seconds() const { return multigrid_ ? multigrid_->exchange_seconds() : 0.0; }
   CellHalo::Traffic halo_traffic() const { return multigrid_ ? multigrid_->halo_traffic() : CellHalo::Traffic{}; }
 
