@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <set>
 #include <string>
@@ -235,37 +236,56 @@ TEST(NeighborList, MostlyStaleRelistIsAWholeListWithTheSprings) {
   EXPECT_FALSE(rl.list.relist(elements_of(p), skin, few, std::vector<double>(p.size(), 0.0)));
 }
 
+// Bodies of 12 elements each (radius 0.2 mm, within 0.4 mm of the body's centre along each axis),
+// the first `owned` of them owned; centre(i, rnd) places body i.
+struct ElementBodies {
+  static constexpr std::size_t per_body = 12;
+  static constexpr double r = 2e-4;
+  std::uint64_t z;
+  std::vector<double> x, radius, mass;
+  std::vector<std::int64_t> key;
+  std::vector<std::int32_t> body;
+  ContactElements e;
+  double rnd() {
+    z = z * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(z >> 11) * 0x1.0p-53;
+  }
+  template <class Centre>
+  ElementBodies(std::uint64_t seed, std::size_t bodies, std::size_t owned, Centre&& centre) : z(seed), mass(bodies, 1.0) {
+    for (std::size_t i = 0; i < bodies; ++i) {
+      const std::array<double, 3> c = centre(i, [this] { return rnd(); });
+      for (std::size_t k = 0; k < per_body; ++k) {
+        for (int d = 0; d < 3; ++d) x.push_back(c[static_cast<std::size_t>(d)] + 8e-4 * (rnd() - 0.5));
+        radius.push_back(r);
+        key.push_back(static_cast<std::int64_t>(((i * 7919) % 1009) * per_body + k));
+        body.push_back(static_cast<std::int32_t>(i));
+      }
+    }
+    e.size = bodies * per_body;
+    e.owned = owned * per_body;
+    e.x = x.data();
+    e.radius = radius.data();
+    e.key = key.data();
+    e.body = body.data();
+    e.body_mass = mass.data();
+  }
+};
+
 // Elements of bodies, as shaped grains give them: many of one body share a cell (the whole list
 // skips a body's run in a cell at once), and no pair of one body is listed. Against brute force,
 // from a build and from a relist with every body stale.
 TEST(NeighborList, ElementsOfBodiesEqualBruteForce) {
-  std::uint64_t z = 777;
-  auto rnd = [&z] {
-    z = z * 6364136223846793005ULL + 1442695040888963407ULL;
-    return static_cast<double>(z >> 11) * 0x1.0p-53;
-  };
-  const std::size_t bodies = 300, per_body = 12, owned_bodies = 240;
-  const double r = 2e-4, skin = 8e-5, L = 0.01;
-  std::vector<double> x, radius, mass(bodies, 1.0);
-  std::vector<std::int64_t> key;
-  std::vector<std::int32_t> body;
-  for (std::size_t i = 0; i < bodies; ++i) {
-    const double c[3] = {L * rnd(), L * rnd(), L * rnd()};
-    for (std::size_t k = 0; k < per_body; ++k) {
-      for (int d = 0; d < 3; ++d) x.push_back(c[d] + 8e-4 * (rnd() - 0.5));
-      radius.push_back(r);
-      key.push_back(static_cast<std::int64_t>(((i * 7919) % 1009) * per_body + k));
-      body.push_back(static_cast<std::int32_t>(i));
-    }
-  }
-  ContactElements e;
-  e.size = bodies * per_body;
-  e.owned = owned_bodies * per_body;
-  e.x = x.data();
-  e.radius = radius.data();
-  e.key = key.data();
-  e.body = body.data();
-  e.body_mass = mass.data();
+  const std::size_t bodies = 300;
+  const double r = ElementBodies::r, skin = 8e-5, L = 0.01;
+  ElementBodies eb(777, bodies, 240, [&](std::size_t, auto rnd) {
+    const double cx = L * rnd(), cy = L * rnd();
+    return std::array<double, 3>{cx, cy, L * rnd()};
+  });
+  std::vector<double>& x = eb.x;
+  const auto& body = eb.body;
+  const auto& key = eb.key;
+  ContactElements& e = eb.e;
+  auto rnd = [&eb] { return eb.rnd(); };
   std::set<PairKey> expected;
   std::size_t same_body_near = 0;
   for (std::size_t a = 0; a < e.size; ++a)
@@ -306,34 +326,17 @@ TEST(NeighborList, ElementsOfBodiesEqualBruteForce) {
 // as a run's ghosts do), within reach of owned elements is found, both from its own search and from
 // a stale owned element's (the moved elements' cells).
 TEST(NeighborList, GhostsLeftOutFarFromTheSubBoxAreFoundWhenTheyComeNear) {
-  std::uint64_t z = 4242;
-  auto rnd = [&z] {
-    z = z * 6364136223846793005ULL + 1442695040888963407ULL;
-    return static_cast<double>(z >> 11) * 0x1.0p-53;
-  };
-  const std::size_t per_body = 12, owned_bodies = 200, bodies = 320;
-  const double r = 2e-4, skin = 8e-5, L = 0.006, face = 0.005;
+  const std::size_t per_body = ElementBodies::per_body, owned_bodies = 200, bodies = 320;
+  const double r = ElementBodies::r, skin = 8e-5, L = 0.006, face = 0.005;
   const double reach = 4e-4 * std::sqrt(3.0) + r, margin = reach + r + 3 * skin;  // DemSolver's rule
-  std::vector<double> x, radius, mass(bodies, 1.0);
-  std::vector<std::int64_t> key;
-  std::vector<std::int32_t> body;
-  for (std::size_t i = 0; i < bodies; ++i) {  // owned centres in x < face, ghosts' beyond it
-    const double c[3] = {i < owned_bodies ? face * rnd() : face + 3e-3 * rnd(), L * rnd(), L * rnd()};
-    for (std::size_t k = 0; k < per_body; ++k) {
-      for (int d = 0; d < 3; ++d) x.push_back(c[d] + 8e-4 * (rnd() - 0.5));
-      radius.push_back(r);
-      key.push_back(static_cast<std::int64_t>(((i * 7919) % 1009) * per_body + k));
-      body.push_back(static_cast<std::int32_t>(i));
-    }
-  }
-  ContactElements e;
-  e.size = bodies * per_body;
-  e.owned = owned_bodies * per_body;
-  e.x = x.data();
-  e.radius = radius.data();
-  e.key = key.data();
-  e.body = body.data();
-  e.body_mass = mass.data();
+  ElementBodies eb(4242, bodies, owned_bodies, [&](std::size_t i, auto rnd) {  // owned centres in x < face
+    const double cx = i < owned_bodies ? face * rnd() : face + 3e-3 * rnd(), cy = L * rnd();
+    return std::array<double, 3>{cx, cy, L * rnd()};
+  });
+  std::vector<double>& x = eb.x;
+  const auto& body = eb.body;
+  const auto& key = eb.key;
+  ContactElements& e = eb.e;
   auto brute = [&] {
     std::vector<PairKey> out;
     for (std::size_t a = 0; a < e.owned; ++a)
