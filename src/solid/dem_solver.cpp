@@ -326,6 +326,8 @@ void DemSolver::rebuild() {
     auto t = timers_.scope("neighbor");
     if (shaped()) {
       entities_.layout(shapes_, key_stride_);
+      element_r_max_ = 0;  // the elements' largest radius on this rank, till the next layout (T5b)
+      for (const double r : entities_.element_radius()) element_r_max_ = std::max(element_r_max_, r);
       pairs_.list().build(list_elements(), skin_, histories);
       q_build_.assign(p_.q.begin(), p_.q.begin() + 4 * static_cast<std::ptrdiff_t>(p_.owned));
       x_list_.assign(p_.x.begin(), p_.x.begin() + 3 * static_cast<std::ptrdiff_t>(p_.size()));
@@ -370,9 +372,7 @@ ContactElements DemSolver::list_elements() {
   // Theory T5b: a ghost element lies beyond the sub-box's face with a neighbour by more than
   // R_max + r_max + 3 s (R the bodies' reach, r the elements' radius) only where no owned element can
   // meet it before the next whole build.
-  double r_element = 0;
-  for (const double r : entities_.element_radius()) r_element = std::max(r_element, r);
-  const double margin = r_max_ + r_element + 3.0 * skin_;
+  const double margin = r_max_ + element_r_max_ + 3.0 * skin_;
   const Vec3 lo = decomp_.sub_lo(), hi = decomp_.sub_hi();
   for (int d = 0; d < 3; ++d) {
     if (decomp_.neighbor(d, 0) != MPI_PROC_NULL) e.near_lo[d] = lo[d] - margin;

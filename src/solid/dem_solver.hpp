@@ -295,6 +295,7 @@ class DemSolver {
   bool relist_due_ = false;     // needs_rebuild(): some rank holds a body past s/2 (T5a: all relist then)
   bool relisting() const;
   ContactElements list_elements();
+  double element_r_max_ = 0;  // list_elements()' margin (theory T5b)
   void relist_stale();
   // Relisting: between lists the stages read only the elements of a listed pair or a wall entry,
   // so only those are placed a step (placed_, sorted; the owned ones first); a list places all.
