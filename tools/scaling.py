@@ -118,9 +118,12 @@ def iterations(a):
         s = json.load(open(os.path.join(out, "summary.json")))
         table[str(p)] = {"iterations_per_step": s["poisson"]["iterations_per_step"],
                          "coarsest_cells": s["poisson"].get("coarsest_cells", 0),
+                         "levels": s["poisson"].get("levels", 0),
+                         "gathered_levels": s["poisson"].get("gathered_levels", 0),
                          "process_grid": s.get("process_grid"), "steps": s["steps"]}
         print(f"{p} ranks {s.get('process_grid')}: {table[str(p)]['iterations_per_step']:.2f} iterations a step, "
-              f"the coarsest level {table[str(p)]['coarsest_cells']} cells", flush=True)
+              f"{table[str(p)]['levels']} levels ({table[str(p)]['gathered_levels']} gathered onto fewer ranks), "
+              f"the coarsest {table[str(p)]['coarsest_cells']} cells", flush=True)
     os.makedirs(a.out, exist_ok=True)
     with open(path, "w") as f:
         json.dump(table, f, indent=1)
@@ -473,8 +476,9 @@ def coupled_model(a, b, runs, net):
     iteration, and per DEM sub-step dem_model's swaps and list check, plus 6 swaps of the bodies' sums
     per flow step (C3's loads, C4a's sums and velocities, C7's moves, the ghosts' refresh). Where
     D/iterations.json counts the Poisson's iterations on P ranks, the Poisson's time, its reductions
-    and the multigrid's exchanges scale by their ratio to 1 rank's, and each cycle's coarsest-level
-    LU adds an all-gather of that level."""
+    and the multigrid's exchanges scale by their ratio to 1 rank's, each cycle's coarsest-level
+    LU adds an all-gather of that level, and each level gathered onto fewer ranks two point-to-point
+    latencies a cycle (its parts in, their corrections out)."""
     if "sendrecv_latency_s" not in net:
         sys.exit("scaling model: network.json predates the point-to-point measurement; run `network` again")
     if 2 not in runs:
@@ -568,6 +572,8 @@ def coupled_model(a, b, runs, net):
                 # The coarsest level's LU on every rank: one all-gather of its right-hand side a cycle.
                 gather = math.ceil(math.log2(p)) * net["latency_s"] + 8.0 * count["coarsest_cells"] / net["bandwidth_bytes_per_s"]
                 reductions += (iters * ratio + 1) * gather
+            if count:
+                reductions += iters * ratio * 2 * count.get("gathered_levels", 0) * lat
             swaps = sum(2 * (lat + 72.0 * max(load["recv"][r][2 * d + s] for r in range(p) for s in range(2)) / bw)
                         for d in face)
             dem = L * (math.ceil(math.log2(p)) * red + swaps) + 6 * swaps

@@ -538,7 +538,9 @@ void FlowScene::summarise(nlohmann::json& s) {
   s["poisson"] = {{"solver", flow_->poisson_description()},
                   {"iterations_per_step", steps_run ? double(poisson_iterations_) / steps_run : 0.0},
                   {"max_iterations", max_iterations_},
-                  {"coarsest_cells", flow_->poisson_coarsest_cells()}};
+                  {"coarsest_cells", flow_->poisson_coarsest_cells()},
+                  {"levels", flow_->poisson_levels()},
+                  {"gathered_levels", flow_->poisson_gathered_levels()}};
   s["dt_limits"] = limits_;
   s["cell_steps_per_second_per_core"] =
       double(cells) * steps_run / std::max(s["loop_seconds"].get<double>(), 1e-9) / decomp_->size();

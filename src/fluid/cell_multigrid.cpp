@@ -51,15 +51,15 @@ double residual(const Level& L, std::size_t c) {
   return L.b[c] - ax;
 }
 
-// Walks level L's owned rows in storage order, giving each row's first fine cell and the storage
-// index of the coarse row (of level C, one coarser) that holds its aggregates, counted from that
-// row's first ghost: fine cell i of the row lies in coarse cell coarse_row + aggregate_of[0][i] - gs[0].
-template <class Level, class F>
-void for_fine_rows(const Level& L, const Level& C, F&& fn) {
-  for (int k = L.s[2]; k < L.s[2] + L.m[2]; ++k)
-    for (int j = L.s[1]; j < L.s[1] + L.m[1]; ++j)
-      fn(C.at(C.gs[0], C.aggregate_of[1][j], C.aggregate_of[2][k]), L.at(L.s[0], j, k));
-}
+// A box of cells [s, s + m) stored x fastest: a level's ghosted array, or a rank's part of a
+// gathered level.
+struct Box {
+  std::array<int, 3> s{}, m{};
+  std::size_t at(int i, int j, int k) const {
+    return (std::size_t(k - s[2]) * m[1] + std::size_t(j - s[1])) * m[0] + std::size_t(i - s[0]);
+  }
+  std::size_t size() const { return std::size_t(m[0]) * m[1] * m[2]; }
+};
 
 }  // namespace
 
@@ -71,9 +71,21 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
         "DMDAGetInfo");
   const PetscInt* own0[3];
   check(DMDAGetOwnershipRanges(fine, &own0[0], &own0[1], &own0[2]), "DMDAGetOwnershipRanges");
+  MPI_Comm_dup(grid.comm(), &transfer_comm_);
+  // The level being made, known on every rank: its process grid, each block's length per
+  // direction, the rank (on transfer_comm_) of each block (x fastest), and this rank's place.
   std::array<int, 3> procs{int(pm), int(pn), int(pp)};
   std::array<std::vector<PetscInt>, 3> own;
   for (int d = 0; d < 3; ++d) own[d].assign(own0[d], own0[d] + procs[d]);
+  std::vector<int> rank_of(std::size_t{1} * procs[0] * procs[1] * procs[2]);
+  for (std::size_t r = 0; r < rank_of.size(); ++r) rank_of[r] = int(r);
+  auto linear = [](const std::array<int, 3>& c, const std::array<int, 3>& p) { return c[0] + p[0] * (c[1] + p[1] * c[2]); };
+  const int me = grid.rank();
+  std::array<int, 3> coords{me % procs[0], (me / procs[0]) % procs[1], me / (procs[0] * procs[1])};
+  bool active = true, gathered = false;
+  MPI_Comm comm = grid.comm();
+  Level::Part part;
+  std::vector<Level::Part> parts;
   std::array<int, 3> n{int(M), int(N), int(P)};
   std::array<std::vector<int>, 3> fine_start;  // of the level being made; empty for the finest
   DMBoundaryType bt[3];
@@ -84,57 +96,122 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
     L->fine_start = fine_start;
     for (int d = 0; d < 3 && !fine_start[d].empty(); ++d)
       for (int I = 0; I < n[d]; ++I) L->aggregate_of[d].insert(L->aggregate_of[d].end(), L->width(d, I), I);
-    check(DMDACreate3d(grid.comm(), bt[0], bt[1], bt[2], DMDA_STENCIL_STAR, n[0], n[1], n[2], procs[0], procs[1],
-                       procs[2], 1, 1, own[0].data(), own[1].data(), own[2].data(), &L->dm),
-          "DMDACreate3d (multigrid level)");
-    check(DMSetUp(L->dm), "DMSetUp");
-    PetscInt xs, ys, zs, xm, ym, zm, gxs, gys, gzs, gxm, gym, gzm;
-    check(DMDAGetCorners(L->dm, &xs, &ys, &zs, &xm, &ym, &zm), "DMDAGetCorners");
-    check(DMDAGetGhostCorners(L->dm, &gxs, &gys, &gzs, &gxm, &gym, &gzm), "DMDAGetGhostCorners");
-    L->s = {int(xs), int(ys), int(zs)};
-    L->m = {int(xm), int(ym), int(zm)};
-    L->gs = {int(gxs), int(gys), int(gzs)};
-    L->gm = {int(gxm), int(gym), int(gzm)};
-    L->stride = {1, L->gm[0], std::ptrdiff_t(L->gm[0]) * L->gm[1]};
-    CellHalo::Block block;
-    block.procs = procs;
-    block.coords = {grid.rank() % procs[0], (grid.rank() / procs[0]) % procs[1], grid.rank() / (procs[0] * procs[1])};
-    for (int d = 0; d < 3; ++d) block.periodic[d] = grid.periodic(d);
-    block.s = L->s;
-    block.m = L->m;
-    block.gs = L->gs;
-    block.gm = L->gm;
-    L->halo = std::make_unique<CellHalo>(grid.comm(), block, 1, CellHalo::Stencil::star);
-    const std::size_t size = std::size_t(L->gm[0]) * L->gm[1] * L->gm[2];
-    for (auto& c : L->coef) c.assign(size, 0.0f);
-    if (levels_.empty())
-      for (auto& c : L->op_coef) c.assign(size, 0.0);
-    L->inv_diag.assign(size, 0.0f);
-    L->x.assign(size, 0.0);  // the ghosts beyond a domain face stay 0 (an outflow face's p = 0)
-    L->b.assign(size, 0.0);
+    L->active = active;
+    L->comm = active ? comm : MPI_COMM_NULL;
+    L->procs = procs;
+    L->coords = coords;
+    L->gathered = gathered;
+    L->part = part;
+    L->parts = parts;
+    if (active) {
+      check(DMDACreate3d(comm, bt[0], bt[1], bt[2], DMDA_STENCIL_STAR, n[0], n[1], n[2], procs[0], procs[1], procs[2],
+                         1, 1, own[0].data(), own[1].data(), own[2].data(), &L->dm),
+            "DMDACreate3d (multigrid level)");
+      check(DMSetUp(L->dm), "DMSetUp");
+      PetscInt xs, ys, zs, xm, ym, zm, gxs, gys, gzs, gxm, gym, gzm;
+      check(DMDAGetCorners(L->dm, &xs, &ys, &zs, &xm, &ym, &zm), "DMDAGetCorners");
+      check(DMDAGetGhostCorners(L->dm, &gxs, &gys, &gzs, &gxm, &gym, &gzm), "DMDAGetGhostCorners");
+      L->s = {int(xs), int(ys), int(zs)};
+      L->m = {int(xm), int(ym), int(zm)};
+      L->gs = {int(gxs), int(gys), int(gzs)};
+      L->gm = {int(gxm), int(gym), int(gzm)};
+      L->stride = {1, L->gm[0], std::ptrdiff_t(L->gm[0]) * L->gm[1]};
+      CellHalo::Block block;
+      block.procs = procs;
+      block.coords = coords;
+      for (int d = 0; d < 3; ++d) block.periodic[d] = grid.periodic(d);
+      block.s = L->s;
+      block.m = L->m;
+      block.gs = L->gs;
+      block.gm = L->gm;
+      L->halo = std::make_unique<CellHalo>(comm, block, 1, CellHalo::Stencil::star);
+      const std::size_t size = std::size_t(L->gm[0]) * L->gm[1] * L->gm[2];
+      for (auto& c : L->coef) c.assign(size, 0.0f);
+      if (levels_.empty())
+        for (auto& c : L->op_coef) c.assign(size, 0.0);
+      L->inv_diag.assign(size, 0.0f);
+      L->x.assign(size, 0.0);  // the ghosts beyond a domain face stay 0 (an outflow face's p = 0)
+      L->b.assign(size, 0.0);
+    }
     levels_.push_back(std::move(L));
     if (long(n[0]) * n[1] * n[2] <= kCoarsestCells) break;
     // Pair the cells of each rank's block along every direction that can be coarsened (a block
-    // of odd length ends in a single cell); keep >= 2 cells per rank on several ranks, and
-    // uniform pairs of an even whole where periodic (the red-black colouring).
+    // of odd length ends in a single cell; uniform pairs of an even whole where periodic, for the
+    // red-black colouring). Where a block would fall below 2 cells on several ranks, the coarser
+    // level is gathered along that direction: ranks 2c and 2c + 1 hand their aggregates to 2c.
+    std::array<bool, 3> ok{}, merge{};
     bool any = false;
     for (int d = 0; d < 3; ++d) {
-      bool ok = n[d] >= 4 && (!grid.periodic(d) || n[d] % 2 == 0);
-      for (PetscInt c : own[d])
-        ok = ok && (c + 1) / 2 >= (procs[d] > 1 ? 2 : 1) && (!grid.periodic(d) || c % 2 == 0);
+      ok[d] = n[d] >= 4 && (!grid.periodic(d) || n[d] % 2 == 0);
+      for (PetscInt c : own[d]) ok[d] = ok[d] && (!grid.periodic(d) || c % 2 == 0);
+      for (PetscInt c : own[d]) merge[d] = merge[d] || (ok[d] && procs[d] > 1 && (c + 1) / 2 < 2);
       fine_start[d].clear();
       int first = 0;
       for (auto& c : own[d]) {
-        const int pairs = ok ? (int(c) + 1) / 2 : int(c);
-        for (int I = 0; I < pairs; ++I) fine_start[d].push_back(first + (ok ? 2 * I : I));
+        const int pairs = ok[d] ? (int(c) + 1) / 2 : int(c);
+        for (int I = 0; I < pairs; ++I) fine_start[d].push_back(first + (ok[d] ? 2 * I : I));
         first += int(c);
         c = pairs;
       }
       fine_start[d].push_back(first);
       n[d] = int(fine_start[d].size()) - 1;
-      any = any || ok;
+      any = any || ok[d];
     }
     if (!any) break;
+    gathered = merge[0] || merge[1] || merge[2];
+    if (!gathered) continue;
+    // Each finer rank's part: the aggregates of its block (`own` holds them per block now).
+    auto part_of = [&](const std::array<int, 3>& c) {
+      Level::Part q;
+      q.rank = rank_of[std::size_t(linear(c, procs))];
+      for (int d = 0; d < 3; ++d) {
+        for (int b = 0; b < c[d]; ++b) q.s[d] += int(own[d][std::size_t(b)]);
+        q.m[d] = int(own[d][std::size_t(c[d])]);
+      }
+      return q;
+    };
+    std::array<int, 3> next_procs;
+    for (int d = 0; d < 3; ++d) next_procs[d] = merge[d] ? (procs[d] + 1) / 2 : procs[d];
+    std::vector<int> next_rank_of(std::size_t{1} * next_procs[0] * next_procs[1] * next_procs[2]);
+    for (int c2 = 0; c2 < next_procs[2]; ++c2)
+      for (int c1 = 0; c1 < next_procs[1]; ++c1)
+        for (int c0 = 0; c0 < next_procs[0]; ++c0) {
+          const std::array<int, 3> c{c0, c1, c2}, f{merge[0] ? 2 * c0 : c0, merge[1] ? 2 * c1 : c1, merge[2] ? 2 * c2 : c2};
+          next_rank_of[std::size_t(linear(c, next_procs))] = rank_of[std::size_t(linear(f, procs))];
+        }
+    std::array<int, 3> next_coords = coords;
+    bool owner = active;
+    for (int d = 0; d < 3; ++d)
+      if (merge[d]) next_coords[d] = coords[d] / 2, owner = owner && coords[d] % 2 == 0;
+    parts.clear();
+    if (active) {
+      part = part_of(coords);
+      part.rank = next_rank_of[std::size_t(linear(next_coords, next_procs))];  // its owner
+    }
+    if (owner)  // the finer blocks whose aggregates this rank owns, in their ranks' order
+      for (int c2 = 0; c2 < procs[2]; ++c2)
+        for (int c1 = 0; c1 < procs[1]; ++c1)
+          for (int c0 = 0; c0 < procs[0]; ++c0) {
+            const std::array<int, 3> c{c0, c1, c2};
+            bool mine = true;
+            for (int d = 0; d < 3; ++d) mine = mine && (merge[d] ? c[d] / 2 : c[d]) == next_coords[d];
+            if (mine) parts.push_back(part_of(c));
+          }
+    for (int d = 0; d < 3; ++d)
+      if (merge[d]) {
+        std::vector<PetscInt> pairs;
+        for (std::size_t b = 0; b < own[d].size(); b += 2)
+          pairs.push_back(own[d][b] + (b + 1 < own[d].size() ? own[d][b + 1] : 0));
+        own[d] = pairs;
+      }
+    MPI_Comm next = MPI_COMM_NULL;
+    MPI_Comm_split(grid.comm(), owner ? 0 : MPI_UNDEFINED, linear(next_coords, next_procs), &next);
+    if (next != MPI_COMM_NULL) level_comms_.push_back(next);
+    comm = next;
+    active = owner;
+    procs = next_procs;
+    coords = next_coords;
+    rank_of = next_rank_of;
   }
 }
 
@@ -145,10 +222,12 @@ CellMultigrid::~CellMultigrid() {
   if (coarse_x_) VecDestroy(&coarse_x_);
   for (auto& L : levels_)
     if (L->dm) DMDestroy(&L->dm);
+  for (MPI_Comm& c : level_comms_) MPI_Comm_free(&c);
+  if (transfer_comm_ != MPI_COMM_NULL) MPI_Comm_free(&transfer_comm_);
 }
 
 void CellMultigrid::exchange(Level& L, std::vector<double>& v) {
-  if (!L.halo->active()) return;  // one rank, nothing periodic: no ghost has a source
+  if (!L.halo || !L.halo->active()) return;  // one rank, nothing periodic: no ghost has a source
   const double start = MPI_Wtime();
   L.halo->exchange({&v});
   exchange_seconds_ += MPI_Wtime() - start;
@@ -181,49 +260,79 @@ void CellMultigrid::set_coefficients(const std::vector<double>& rho, bool coarse
       F.coef[d][fc] = float(coef);
     });
   }
-  // Coarse levels.
+  // Coarse levels, each computed on the next finer level's ranks (a gathered level's parts sent
+  // to their owners: per part, the faces along x, then y, then z, each over the part's cells and
+  // its high face).
   for (std::size_t l = 1; coarse && l < levels_.size(); ++l) {
     Level& f = *levels_[l - 1];
     Level& C = *levels_[l];
-    for (int d = 0; d < 3; ++d) {
-      std::array<int, 3> m = C.m;
-      m[d] += 1;
+    if (!f.active) break;  // nor on any coarser level
+    // The coarse face on the low side of cell (I, J, K) along d.
+    auto face = [&](int d, int I, int J, int K) {
+      const int idx[3] = {I, J, K};
       const int nc = C.n[d];
-      for_owned(C.s, m, [&](int I, int J, int K) {
-        const int idx[3] = {I, J, K};
-        int lo[3], hi[3];  // the fine faces on the coarse face's plane
-        for (int e = 0; e < 3; ++e) {
-          lo[e] = C.fine_start[e][idx[e]];
-          hi[e] = e == d ? lo[e] + 1 : C.fine_start[e][idx[e] + 1];
-        }
-        double sum = 0;
-        for (int c = lo[2]; c < hi[2]; ++c)
-          for (int b = lo[1]; b < hi[1]; ++b)
-            for (int a = lo[0]; a < hi[0]; ++a) sum += f.coef[d][f.at(a, b, c)];
-        // Over the distance between the coarse centres in fine cells; at a domain face, the
-        // distance from the centre to the face in fine half cells (the fine term's distance).
-        const int I0 = idx[d];
-        const double distance = !grid_.periodic(d) && (I0 == 0 || I0 == nc)
-                                    ? C.width(d, I0 == 0 ? 0 : nc - 1)
-                                    : 0.5 * (C.width(d, (I0 - 1 + nc) % nc) + C.width(d, I0 % nc));
-        C.coef[d][C.at(I, J, K)] = sum / distance;
-      });
+      int lo[3], hi[3];  // the fine faces on the coarse face's plane
+      for (int e = 0; e < 3; ++e) {
+        lo[e] = C.fine_start[e][idx[e]];
+        hi[e] = e == d ? lo[e] + 1 : C.fine_start[e][idx[e] + 1];
+      }
+      double sum = 0;
+      for (int c = lo[2]; c < hi[2]; ++c)
+        for (int b = lo[1]; b < hi[1]; ++b)
+          for (int a = lo[0]; a < hi[0]; ++a) sum += f.coef[d][f.at(a, b, c)];
+      // Over the distance between the coarse centres in fine cells; at a domain face, the
+      // distance from the centre to the face in fine half cells (the fine term's distance).
+      const int I0 = idx[d];
+      const double distance = !grid_.periodic(d) && (I0 == 0 || I0 == nc)
+                                  ? C.width(d, I0 == 0 ? 0 : nc - 1)
+                                  : 0.5 * (C.width(d, (I0 - 1 + nc) % nc) + C.width(d, I0 % nc));
+      return sum / distance;
+    };
+    auto with_high_face = [](std::array<int, 3> m, int d) {
+      m[d] += 1;
+      return m;
+    };
+    if (!C.gathered) {
+      for (int d = 0; d < 3; ++d)
+        for_owned(C.s, with_high_face(C.m, d),
+                  [&](int I, int J, int K) { C.coef[d][C.at(I, J, K)] = float(face(d, I, J, K)); });
+      continue;
     }
+    C.staging.clear();
+    for (int d = 0; d < 3; ++d)
+      for_owned(C.part.s, with_high_face(C.part.m, d), [&](int I, int J, int K) { C.staging.push_back(face(d, I, J, K)); });
+    auto size = [&](const Level::Part& q) {
+      std::size_t n = 0;
+      for (int d = 0; d < 3; ++d) {
+        const auto m = with_high_face(q.m, d);
+        n += std::size_t(m[0]) * m[1] * m[2];
+      }
+      return n;
+    };
+    gather(C, C.staging, size, [&](const Level::Part& q, const double* v) {
+      for (int d = 0; d < 3; ++d)
+        for_owned(q.s, with_high_face(q.m, d), [&](int I, int J, int K) { C.coef[d][C.at(I, J, K)] = float(*v++); });
+    });
   }
   for (std::size_t l = 0; l < (coarse ? levels_.size() : 1); ++l) {
     Level& L = *levels_[l];
+    if (!L.active) break;
     for_owned(L.s, L.m, [&](int i, int j, int k) {
       const std::size_t c = L.at(i, j, k);
       const double s = coefficient_sum(L, c);
       L.inv_diag[c] = float(s > 0 ? 1 / s : 1.0);
     });
   }
-  if (coarse && coarse_direct_) assemble_coarsest();
+  if (coarse && coarse_direct_ && levels_.back()->active) assemble_coarsest();
 }
 
 long CellMultigrid::coarsest_cells() const {
   const auto& n = levels_.back()->n;
   return long(n[0]) * n[1] * n[2];
+}
+
+int CellMultigrid::gathered_levels() const {
+  return int(std::count_if(levels_.begin(), levels_.end(), [](const auto& L) { return L->gathered; }));
 }
 
 template <class F>
@@ -240,7 +349,7 @@ void CellMultigrid::for_natural(F&& fn) const {
 
 void CellMultigrid::assemble_coarsest() {
   Level& L = *levels_.back();
-  const MPI_Comm comm = grid_.comm();
+  const MPI_Comm comm = L.comm;
   int size = 1;
   MPI_Comm_size(comm, &size);
   const long cells = coarsest_cells();
@@ -334,7 +443,7 @@ void CellMultigrid::solve_coarsest() {
   for_owned(L.s, L.m, [&](int i, int j, int k) { coarse_mine_.push_back(L.b[L.at(i, j, k)]); });
   coarse_all_.resize(std::size_t(coarsest_cells()));
   MPI_Allgatherv(coarse_mine_.data(), int(coarse_mine_.size()), MPI_DOUBLE, coarse_all_.data(), coarse_counts_.data(),
-                 coarse_displs_.data(), MPI_DOUBLE, grid_.comm());
+                 coarse_displs_.data(), MPI_DOUBLE, L.comm);
   PetscScalar* b;
   check(VecGetArray(coarse_b_, &b), "VecGetArray");
   for_natural([&](std::size_t natural, std::size_t at) { b[natural] = coarse_all_[at]; });
@@ -423,29 +532,112 @@ void CellMultigrid::smooth(Level& L, int sweeps, bool reverse, bool from_zero, b
   if (last_exchange) exchange(L, L.x);
 }
 
+template <class Size, class Unpack>
+void CellMultigrid::gather(Level& C, const std::vector<double>& mine, Size&& size, Unpack&& unpack) {
+  const double start = MPI_Wtime();
+  const int tag = 700;
+  if (!C.active) {  // the part goes to its owner
+    MPI_Send(mine.data(), int(mine.size()), MPI_DOUBLE, C.part.rank, tag, transfer_comm_);
+    transfer_traffic_.messages += 1, transfer_traffic_.bytes += 8.0 * double(mine.size());
+  } else {
+    int me = 0;
+    MPI_Comm_rank(transfer_comm_, &me);
+    C.inbox.resize(C.parts.size());
+    std::vector<MPI_Request> requests;
+    for (std::size_t p = 0; p < C.parts.size(); ++p) {
+      if (C.parts[p].rank == me) continue;
+      C.inbox[p].resize(size(C.parts[p]));
+      requests.emplace_back();
+      MPI_Irecv(C.inbox[p].data(), int(C.inbox[p].size()), MPI_DOUBLE, C.parts[p].rank, tag, transfer_comm_,
+                &requests.back());
+    }
+    MPI_Waitall(int(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+    for (std::size_t p = 0; p < C.parts.size(); ++p) unpack(C.parts[p], C.parts[p].rank == me ? mine.data() : C.inbox[p].data());
+  }
+  exchange_seconds_ += MPI_Wtime() - start;
+}
+
+template <class Pack>
+void CellMultigrid::scatter(Level& C, std::vector<double>& mine, Pack&& pack) {
+  const double start = MPI_Wtime();
+  const int tag = 701;
+  const std::size_t count = std::size_t(C.part.m[0]) * C.part.m[1] * C.part.m[2];
+  mine.resize(count);
+  if (!C.active) {
+    MPI_Recv(mine.data(), int(count), MPI_DOUBLE, C.part.rank, tag, transfer_comm_, MPI_STATUS_IGNORE);
+  } else {
+    int me = 0;
+    MPI_Comm_rank(transfer_comm_, &me);
+    C.inbox.resize(C.parts.size());
+    std::vector<MPI_Request> requests;
+    for (std::size_t p = 0; p < C.parts.size(); ++p) {
+      std::vector<double>& out = C.parts[p].rank == me ? mine : C.inbox[p];
+      out.clear();
+      pack(C.parts[p], out);
+      if (C.parts[p].rank == me) continue;
+      requests.emplace_back();
+      MPI_Isend(out.data(), int(out.size()), MPI_DOUBLE, C.parts[p].rank, tag, transfer_comm_, &requests.back());
+      transfer_traffic_.messages += 1, transfer_traffic_.bytes += 8.0 * double(out.size());
+    }
+    MPI_Waitall(int(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  }
+  exchange_seconds_ += MPI_Wtime() - start;
+}
+
 void CellMultigrid::restrict_residual(Level& L, Level& C) {
   // The residual's rows are cell integrals: a coarse cell's right-hand side is the sum of its fine
   // cells' residuals, taken in the fine level's storage order (a coarse cell's fine cells k, then
   // j, then i ascending); the aggregates lie within each rank's block. The pre-smoothing ends with
   // a pass over colour 1, which solves those rows given their neighbours, unchanged since: their
-  // residual is zero (to the rounding of x = s / diag), and only colour 0's are summed.
-  for_owned(C.s, C.m, [&](int I, int J, int K) { C.b[C.at(I, J, K)] = 0; });
+  // residual is zero (to the rounding of x = s / diag), and only colour 0's are summed. Into the
+  // coarse level's owned cells, or, gathered, into this rank's part sent to its owner.
+  double* out;
+  Box box;
+  if (C.gathered) {
+    box = {C.part.s, C.part.m};
+    C.staging.assign(box.size(), 0.0);
+    out = C.staging.data();
+  } else {
+    box = {C.gs, C.gm};
+    for_owned(C.s, C.m, [&](int I, int J, int K) { C.b[C.at(I, J, K)] = 0; });
+    out = C.b.data();
+  }
   const int* const agg = C.aggregate_of[0].data() + L.s[0];
   for (int k = L.s[2]; k < L.s[2] + L.m[2]; ++k)
     for (int j = L.s[1]; j < L.s[1] + L.m[1]; ++j) {
-      const std::size_t coarse_row = C.at(C.gs[0], C.aggregate_of[1][j], C.aggregate_of[2][k]);
+      double* const coarse_row = out + box.at(box.s[0], C.aggregate_of[1][j], C.aggregate_of[2][k]) - box.s[0];
       const std::size_t c0 = L.at(L.s[0], j, k);
-      for (int i = (L.s[0] + j + k) & 1; i < L.m[0]; i += 2)
-        C.b[coarse_row + agg[i] - C.gs[0]] += residual(L, c0 + i);
+      for (int i = (L.s[0] + j + k) & 1; i < L.m[0]; i += 2) coarse_row[agg[i]] += residual(L, c0 + i);
     }
+  if (C.gathered)
+    gather(C, C.staging, [](const Level::Part& q) { return Box{q.s, q.m}.size(); },
+           [&](const Level::Part& q, const double* v) {
+             for_owned(q.s, q.m, [&](int I, int J, int K) { C.b[C.at(I, J, K)] = *v++; });
+           });
 }
 
 void CellMultigrid::prolong(Level& C, Level& L) {
-  // Injection (the restriction's transpose): each fine cell gains its aggregate's correction.
+  // Injection (the restriction's transpose): each fine cell gains its aggregate's correction,
+  // from the coarse level's owned cells or, gathered, from this rank's part sent by its owner.
+  const double* in;
+  Box box;
+  if (C.gathered) {
+    scatter(C, C.staging, [&](const Level::Part& q, std::vector<double>& out) {
+      for_owned(q.s, q.m, [&](int I, int J, int K) { out.push_back(C.x[C.at(I, J, K)]); });
+    });
+    box = {C.part.s, C.part.m};
+    in = C.staging.data();
+  } else {
+    box = {C.gs, C.gm};
+    in = C.x.data();
+  }
   const int* const agg = C.aggregate_of[0].data() + L.s[0];
-  for_fine_rows(L, C, [&](std::size_t coarse_row, std::size_t c0) {
-    for (int i = 0; i < L.m[0]; ++i) L.x[c0 + i] += C.x[coarse_row + agg[i] - C.gs[0]];
-  });
+  for (int k = L.s[2]; k < L.s[2] + L.m[2]; ++k)
+    for (int j = L.s[1]; j < L.s[1] + L.m[1]; ++j) {
+      const double* const coarse_row = in + box.at(box.s[0], C.aggregate_of[1][j], C.aggregate_of[2][k]) - box.s[0];
+      double* const x = L.x.data() + L.at(L.s[0], j, k);
+      for (int i = 0; i < L.m[0]; ++i) x[i] += coarse_row[agg[i]];
+    }
 }
 
 void CellMultigrid::cycle(std::size_t l) {
@@ -462,7 +654,7 @@ void CellMultigrid::cycle(std::size_t l) {
   smooth(L, pre_, false, true);
   Level& C = *levels_[l + 1];
   restrict_residual(L, C);
-  cycle(l + 1);
+  if (C.active) cycle(l + 1);  // else its owner's correction comes back in the prolongation
   prolong(C, L);
   exchange(L, L.x);
   // The coarser level reads only owned cells of this one, and apply() copies only owned cells out.
@@ -511,7 +703,7 @@ void CellMultigrid::apply(Vec xin, Vec yout) {
 }
 
 CellHalo::Traffic CellMultigrid::halo_traffic() const {
-  CellHalo::Traffic t;
+  CellHalo::Traffic t = transfer_traffic_;
   for (const auto& L : levels_)
     if (L->halo) t += L->halo->traffic();
   return t;

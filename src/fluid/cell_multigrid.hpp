@@ -7,9 +7,10 @@
 // aggregates the fine cells of one rank's block in pairs along each direction that can be coarsened;
 // a block of odd length ends in a single cell, so odd sizes coarsen too (180 -> 90 -> 45 -> 23 ->
 // 12 -> 6; ending in a triple instead took 13-14 CG iterations where pairs take 10,
-// test_cell_multigrid). A direction is not coarsened (semi-coarsening) where a rank's block would fall below 2 cells
-// (1 on one rank), or, periodic, where a block or the whole is odd (red-black colouring needs
-// even periodic lengths and uniform pairs there). A coarse face coefficient is the sum of the fine
+// test_cell_multigrid). A direction is not coarsened (semi-coarsening) where it is shorter than 4
+// cells, or, periodic, where a block or the whole is odd (red-black colouring needs even periodic
+// lengths and uniform pairs there); where a rank's block would fall below 2 cells on several
+// ranks, the coarser level is gathered onto half the ranks along that direction (below). A coarse face coefficient is the sum of the fine
 // coefficients across it over the distance between the two coarse centres in fine cells,
 // (w_low + w_high) / 2 for aggregates of w_low and w_high cells (fine cells in series); at a
 // domain face, over the width w of the coarse cell beside it (its centre lies w / 2 fine cells
@@ -22,10 +23,13 @@
 // preconditioner; the operator CG iterates on (apply_operator) keeps the double coefficients. Red-black sweeps give the same numbers on any rank
 // count (the aggregates, and so the preconditioner, follow the ranks' blocks).
 //
-// Each level lives on its own DMDA with the fine level's process grid and each block's aggregate
-// count as ownership ranges (ghost width 1, face ghosts filled by fluid/cell_halo.hpp); coarsening stops where no
-// direction can be coarsened or below 256 cells, and the coarsest level gets many sweeps (20 by
-// default).
+// Each level lives on its own DMDA with each block's aggregate count as ownership ranges (ghost
+// width 1, face ghosts filled by fluid/cell_halo.hpp). Where a direction's blocks would fall below
+// 2 cells on several ranks, the coarser level is gathered: pairs of ranks along that direction
+// hand their aggregates to the first of the pair, which owns both parts from there down (the
+// others wait for its correction), so every direction coarsens on as on one rank (theory F9a).
+// Coarsening stops where no direction can be coarsened or below 256 cells; the coarsest level is
+// solved exactly (or by 20 sweeps).
 #pragma once
 #include <petscdmda.h>
 #include <petscksp.h>
@@ -58,11 +62,30 @@ class CellMultigrid {
   void apply_operator(Vec x, Vec y);
   int levels() const { return int(levels_.size()); }
   long coarsest_cells() const;
+  int gathered_levels() const;  // levels gathered onto fewer ranks than the next finer one
   double exchange_seconds() const { return exchange_seconds_; }  // ghost exchanges, all levels
   CellHalo::Traffic halo_traffic() const;                          // what they sent, all levels
 
  private:
   struct Level {
+    // The ranks that own cells of this level (a rank left out of a gathered level is left out of
+    // every coarser one): their communicator (MPI_COMM_NULL elsewhere), process grid, and this
+    // rank's coordinates in it.
+    bool active = true;
+    MPI_Comm comm = MPI_COMM_NULL;
+    std::array<int, 3> procs{}, coords{};
+    // Gathered from the next finer level: each of its ranks computes its part (the aggregates of
+    // its block) and sends it to the part's owner here. On a finer rank, its part and the owner's
+    // rank (on the multigrid's own communicator); on an owner, the parts it holds.
+    struct Part {
+      int rank = 0;
+      std::array<int, 3> s{}, m{};
+    };
+    bool gathered = false;
+    Part part;
+    std::vector<Part> parts;
+    std::vector<double> staging;                // this rank's part of a transfer
+    std::vector<std::vector<double>> inbox;     // an owner's parts of a transfer
     DM dm = nullptr;
     std::unique_ptr<CellHalo> halo;  // face ghosts, width 1
     std::array<int, 3> n{}, s{}, m{}, gs{}, gm{};
@@ -94,6 +117,13 @@ class CellMultigrid {
   void restrict_residual(Level& L, Level& C);
   // The coarser level's correction added to each of its aggregate's cells (prolongation).
   void prolong(Level& C, Level& L);
+  // A gathered level's transfers: every finer rank's part (`mine`, `size(part)` values) to the
+  // part's owner, which reads each through unpack(part, values); and back, each owner's parts
+  // packed by pack(part, values) to their ranks, which receive theirs into `mine`.
+  template <class Size, class Unpack>
+  void gather(Level& C, const std::vector<double>& mine, Size&& size, Unpack&& unpack);
+  template <class Pack>
+  void scatter(Level& C, std::vector<double>& mine, Pack&& pack);
   void cycle(std::size_t l);
   // The coarsest level's exact solve (theory F9a): its operator (the V-cycle's single-precision
   // coefficients, in double) gathered to every rank in the level's natural order and factored by
@@ -114,6 +144,9 @@ class CellMultigrid {
   KSP coarse_ksp_ = nullptr;
   Vec coarse_b_ = nullptr, coarse_x_ = nullptr;
   double exchange_seconds_ = 0;
+  MPI_Comm transfer_comm_ = MPI_COMM_NULL;     // the gathered levels' transfers
+  std::vector<MPI_Comm> level_comms_;          // the gathered levels' communicators
+  CellHalo::Traffic transfer_traffic_;
   std::vector<std::unique_ptr<Level>> levels_;
 };
 

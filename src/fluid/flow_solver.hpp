@@ -192,6 +192,8 @@ class FlowSolver {
   }
   std::string poisson_description() const { return poisson_->description(); }
   long poisson_coarsest_cells() const { return poisson_->coarsest_cells(); }
+  int poisson_levels() const { return poisson_->levels(); }
+  int poisson_gathered_levels() const { return poisson_->gathered_levels(); }
   // What this rank's ghost exchanges sent since the start (messages, bytes): the fields' and the
   // multigrid's (PETSc's own traffic in the Krylov solver is not counted).
   CellHalo::Traffic field_traffic() const { return grid_->halo_traffic(); }

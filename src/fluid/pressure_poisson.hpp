@@ -59,6 +59,8 @@ class PressurePoisson {
   bool singular() const { return singular_; }
   std::string description() const;  // KSP and PC types, for the log
   long coarsest_cells() const;       // the multigrid's coarsest level (0 without it)
+  int levels() const { return multigrid_ ? multigrid_->levels() : 0; }
+  int gathered_levels() const { return multigrid_ ? multigrid_->gathered_levels() : 0; }
   double exchange_seconds() const { return multigrid_ ? multigrid_->exchange_seconds() : 0.0; }
   CellHalo::Traffic halo_traffic() const { return multigrid_ ? multigrid_->halo_traffic() : CellHalo::Traffic{}; }
 

@@ -33,8 +33,9 @@ struct Problem {
   Decomposition decomp;
   FluidGrid grid;
   std::vector<double> rho;
-  explicit Problem(std::array<int, 3> n, MPI_Comm comm = MPI_COMM_WORLD, BoundaryKind x_sides = BoundaryKind::no_slip)
-      : decomp(comm, {0, 0, 0}, {kL, kL, 0.75 * kL}),
+  explicit Problem(std::array<int, 3> n, MPI_Comm comm = MPI_COMM_WORLD, BoundaryKind x_sides = BoundaryKind::no_slip,
+                   std::array<int, 3> procs = {0, 0, 0})
+      : decomp(comm, {0, 0, 0}, {kL, kL, 0.75 * kL}, procs),
         grid(decomp, n,
              {{{x_sides, x_sides},
                {BoundaryKind::free_slip, BoundaryKind::free_slip},
@@ -96,10 +97,12 @@ TEST(CellMultigrid, OddSizesCoarsenAndTheVCycleIsSymmetricPositive) {
 
 // One V-cycle applied to the source, on `comm`, as a whole-grid array (x fastest) on every rank of
 // it: each rank writes its own cells, the rest are 0, summed (adding zeros is exact).
-std::vector<double> vcycle_of_source(std::array<int, 3> n, MPI_Comm comm, BoundaryKind x_sides) {
-  Problem P(n, comm, x_sides);
+std::vector<double> vcycle_of_source(std::array<int, 3> n, MPI_Comm comm, BoundaryKind x_sides,
+                                     std::array<int, 3> procs = {0, 0, 0}, int* levels = nullptr) {
+  Problem P(n, comm, x_sides, procs);
   const FluidGrid& g = P.grid;
   CellMultigrid mg(g);
+  if (levels) *levels = mg.levels();
   mg.set_coefficients(P.rho);
   Vec x, y;
   DMCreateGlobalVector(g.pressure_dm(), &x);
@@ -148,6 +151,32 @@ TEST(CellMultigrid, TheVCycleGivesTheSameBitsOnAnyRankCount) {
     EXPECT_EQ(differ, 0u) << size << " ranks against 1, x " << boundary_name(x_sides) << ": first at cell " << first
                           << ", " << ranks[first] << " against " << one[first];
     EXPECT_NE(one[n[0] / 2], 0.0);
+  }
+}
+
+// Where the ranks' blocks would fall below 2 cells, the coarser level is gathered onto half the
+// ranks along that direction (theory F9a), so the levels go on as one rank's: 16 x 48 x 48 cells
+// on 4 x 1 x 1 ranks (blocks of 4) take 16 -> 8 (blocks of 2) -> 4 (on 2 ranks) -> 2 (on 1) along
+// x, 4 levels as on one rank, and with blocks that pair up as one rank's the same bits (before,
+// x stopped at 8 cells while y and z went on: 5 levels, other numbers). With walls and with x
+// periodic.
+TEST(CellMultigrid, SmallBlocksAreGatheredOntoFewerRanksAndKeepOneRanksLevels) {
+  int rank, size;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  const std::array<int, 3> n{16, 48, 48};
+  for (const BoundaryKind x_sides : {BoundaryKind::no_slip, BoundaryKind::periodic}) {
+    int levels = 0, one_levels = 0;
+    const std::vector<double> ranks = vcycle_of_source(n, MPI_COMM_WORLD, x_sides, {size, 1, 1}, &levels);
+    if (rank != 0) continue;
+    const std::vector<double> one = vcycle_of_source(n, MPI_COMM_SELF, x_sides, {1, 1, 1}, &one_levels);
+    EXPECT_EQ(levels, one_levels) << size << " ranks";
+    EXPECT_EQ(one_levels, 4);
+    std::size_t differ = 0, first = 0;
+    for (std::size_t c = 0; c < one.size(); ++c)
+      if (ranks[c] != one[c] && differ++ == 0) first = c;
+    EXPECT_EQ(differ, 0u) << size << " ranks against 1, x " << boundary_name(x_sides) << ": first at cell " << first
+                          << ", " << ranks[first] << " against " << one[first];
   }
 }
 
