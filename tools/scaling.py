@@ -466,10 +466,11 @@ def coupled_model(a, b, runs, net):
     """A coupled flow step on P ranks: its stages end in collective waits (the Poisson's reductions,
     the sub-steps' list checks, the bodies' sums), so each stage takes its busiest rank. Per rank, the
     flow's and the cell-wise coupling stages scale with its cells, the DEM sub-steps as dem_model's
-    step (pairs, bodies, owned plus ghost bodies, from `tessera balance`), the solid fraction and the
-    fluid force with the bodies it lays out (owned ones and the ghosts whose nodes reach its cells:
-    `laid_out`, or every ghost from an older `tessera balance`); each costed by the 1-rank run's
-    timers. Then the
+    step (pairs, bodies, owned plus ghost bodies, from `tessera balance`), the solid fraction with the
+    time its lay-outs take when `tessera balance` does them on one core (owned bodies and the ghosts
+    whose nodes reach its cells, over its cells: a ghost's sliver costs less than a whole body) and
+    the fluid force with the cells they report (an older `tessera balance`: both per laid-out body);
+    each costed by the 1-rank run's timers. Then the
     exchanges: the field and multigrid halos (their exchanges per flow step, and bytes per face cell,
     from the 2-rank run's per-rank traffic; at P each exchange pays one latency per split direction
     plus the busiest rank's face bytes over the bandwidth), the Poisson's 3 reductions per Krylov
@@ -506,6 +507,7 @@ def coupled_model(a, b, runs, net):
         return counted[q]["iterations_per_step"] / counted[1]["iterations_per_step"], counted[q]
     cellwise = avg("pore_liquid", "correction")
     bodywise = avg("solid_fraction", "fluid_force")
+    solid, force = avg("solid_fraction"), avg("fluid_force")
     contact = avg("dem/contact_forces")
     per_body = avg("dem/integrate", "dem/wall_forces")
     per_list = avg("dem/neighbor")
@@ -523,6 +525,10 @@ def coupled_model(a, b, runs, net):
     # The list bins the owned elements and the ghosts' within reach of the sub-box (theory T5b), when
     # `tessera balance` counted them; else it is priced per owned plus ghost body.
     E = sum(row1["load_" + cuts].get("owned_elements", [0.0]))
+    # The lay-outs each rank makes, done and timed by `tessera balance` on one core
+    # (coupling/layout_cost.hpp): the solid fraction priced by their time, the fluid force by the
+    # cells they report, each against 1 rank's.
+    layout1 = row1["load_" + cuts].get("layout")
     # The 2-rank run's traffic: exchanges per flow step (one neighbour: a message an exchange) and
     # bytes per cell of the face between the two ranks.
     split = [d for d in range(3) if two["process_grid"][d] > 1]
@@ -555,8 +561,14 @@ def coupled_model(a, b, runs, net):
         else:
             listed = local
         ratio, count = iteration_ratio(p)
+        lay = load.get("layout")
+        if layout1 and lay:
+            S1, K1 = sum(layout1["seconds"]), sum(layout1["cells"])
+            body_stage = [solid * lay["seconds"][r] / S1 + force * lay["cells"][r] / K1 for r in range(p)]
+        else:
+            body_stage = [bodywise * laid[r] / B for r in range(p)]
         stages = {"cells": max((flow + (ratio - 1) * poisson + cellwise + rest) * cells[r] / N for r in range(p)),
-                  "bodies": max(bodywise * laid[r] / B for r in range(p)),
+                  "bodies": max(body_stage),
                   "dem": max(contact * load["pairs"][r] / C + (per_body + dem_rest) * load["bodies"][r] / B +
                              per_list * listed[r] / B + per_local * local[r] / B for r in range(p))}
         compute = sum(stages.values())

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/blast_case.hpp"
+#include "coupling/layout_cost.hpp"
 #include "core/balance.hpp"
 #include "core/config.hpp"
 #include "core/decomposition.hpp"
@@ -153,6 +154,7 @@ int balance_report(const BalanceRequest& rq) {
   std::vector<WorkSample> work;
   std::vector<Vec3> x;
   std::vector<double> radius, node_reach;
+  std::vector<BodyPose> poses;  // a coupled case's, for its lay-outs (coupling/layout_cost.hpp)
   double r_max = 0, r_min = 1e300;
   for (std::size_t i = 0; i + static_cast<std::size_t>(cols) <= rows.size(); i += static_cast<std::size_t>(cols)) {
     x.push_back({rows[i + 6], rows[i + 7], rows[i + 8]});
@@ -169,6 +171,7 @@ int balance_report(const BalanceRequest& rq) {
       } else if (cols >= 19) {
         const Quaternion q{rows[i + 15], rows[i + 16], rows[i + 17], rows[i + 18]};
         for (const Vec3& c : shapes[k - 1].spheres) elements.x.push_back(x.back() + q.rotate(c));
+        poses.push_back({x.back(), q, int(k)});
         element_radius = std::max(element_radius, shapes[k - 1].sphere_radius);
       }
     }
@@ -263,6 +266,13 @@ int balance_report(const BalanceRequest& rq) {
     const double equal = imbalance(equal_work), balanced = imbalance(balanced_work);
     const RankLoad equal_load = dem_rank_load(x, radius, lo, hi, dims, equal_cuts(lo, hi, dims), skin, node_reach, places);
     const RankLoad balanced_load = dem_rank_load(x, radius, lo, hi, dims, cuts, skin, node_reach, places);
+    // A coupled case's lay-outs, each rank's done and timed here (the body stages' price).
+    auto layout_json = [&](const CutPlanes& c) {
+      const LayoutCost lc = layout_cost(shapes, poses, lo, spacing, cells, cell_slabs(dims, c), 5);
+      return nlohmann::json{{"seconds", lc.seconds}, {"cells", lc.cells}, {"bodies", lc.bodies}};
+    };
+    nlohmann::json layout_equal, layout_balanced;
+    if (coupled && !poses.empty()) layout_equal = layout_json(equal_cuts(lo, hi, dims)), layout_balanced = layout_json(cuts);
     std::string text;
     for (int d = 0; d < 3; ++d) {
       if (d) text += " |";
@@ -280,6 +290,10 @@ int balance_report(const BalanceRequest& rq) {
                      {"work_per_rank_balanced", balanced_work},
                      {"load_equal", load_json(equal_load)},
                      {"load_balanced", load_json(balanced_load)}});
+    if (!layout_balanced.is_null()) {
+      table.back()["load_equal"]["layout"] = layout_equal;
+      table.back()["load_balanced"]["layout"] = layout_balanced;
+    }
     if (coupled) {  // the cells' share of the work above (cells x cell_weight per rank), and the
                     // cells of each slab along x, y, z (the halo's faces: the scaling model's)
       table.back()["cell_work_equal"] = equal_cells;

@@ -121,6 +121,7 @@ class SolidPhase {
   using Pose = std::array<double, 7>;  // x, y, z, qw, qx, qy, qz
   Pose layout_pose(const Vec3& x, const Quaternion& q, int shape) const;
   long layouts_computed() const { return layouts_; }  // this rank, whole run
+  std::size_t cell_entries() const { return cell_.size(); }  // the bodies' cells here, one a body and cell
   // Of those, the bodies whose nodes could not reach this rank's cells (ghosts, mostly): nothing
   // was turned or swept for them.
   long layouts_elsewhere() const { return layouts_elsewhere_; }

@@ -21,6 +21,7 @@
 #include "core/errors.hpp"
 #include "core/exact_sum.hpp"
 #include "coupling/coupled_step.hpp"
+#include "coupling/layout_cost.hpp"
 #include "solid/rank_load.hpp"
 #include "solid/shape.hpp"
 #include "support/dem_fixture.hpp"
@@ -246,6 +247,36 @@ TEST(SolidFraction, EachRankLaysOutTheBodiesTheScalingModelCounts) {
     EXPECT_LT(laid_ghosts, 0.8 * ghosts);
   }
   if (root()) std::printf("%zu ranks: %.0f ghosts, %.0f of them laid out\n", load.ghosts.size(), ghosts, laid_ghosts);
+  // The lay-outs `tessera balance` does on one core for the model (coupling/layout_cost.hpp): each
+  // rank's bodies and the cells they report, as this rank's SolidPhase has them (a convex grain: one
+  // piece a cell), the cells summing to one rank's whatever the split.
+  ASSERT_TRUE(t.convex);
+  std::vector<BodyPose> poses;
+  for (std::size_t b = 0; b < xs.size(); ++b) {
+    const Quaternion q = turn(static_cast<int>(b));
+    const double qn = std::sqrt(q.norm2());
+    poses.push_back({xs[b], {q.w / qn, q.x / qn, q.y / qn, q.z / qn}, 1});
+  }
+  const FluidGrid& g = flow.grid();
+  const Vec3 h{g.h(0), g.h(1), g.h(2)};
+  std::array<std::vector<double>, 3> slabs, whole;
+  for (int d = 0; d < 3; ++d) {
+    const auto& cuts = rig.decomp->cuts(d);
+    slabs[d].assign(static_cast<std::size_t>(dims[d]), 0.0);
+    for (int i = 0; i < g.cells()[d]; ++i) {
+      const double x = (i + 0.5) * h[d];
+      slabs[d][static_cast<std::size_t>(std::upper_bound(cuts.begin() + 1, cuts.end() - 1, x) - (cuts.begin() + 1))] += 1;
+    }
+    whole[d] = {static_cast<double>(g.cells()[d])};
+  }
+  const LayoutCost lc = layout_cost(rig.dem->shapes(), poses, {0, 0, 0}, h, g.cells(), slabs, 1);
+  const LayoutCost one = layout_cost(rig.dem->shapes(), poses, {0, 0, 0}, h, g.cells(), whole, 1);
+  EXPECT_EQ(lc.bodies[me], static_cast<double>(solid.layouts_computed() - solid.layouts_elsewhere()));
+  EXPECT_EQ(lc.cells[me], static_cast<double>(solid.cell_entries()));
+  double cells = 0;
+  for (const double c : lc.cells) cells += c;
+  EXPECT_EQ(cells, one.cells[0]);
+  EXPECT_GT(lc.seconds[me], 0.0);
 }
 
 // A grain at (4, 4, zc) mm in a box of water up to z0 at rest; returns the fluid force and moment
