@@ -540,8 +540,7 @@ void CellMultigrid::gather(Level& C, const std::vector<double>& mine, Size&& siz
     MPI_Send(mine.data(), int(mine.size()), MPI_DOUBLE, C.part.rank, tag, transfer_comm_);
     transfer_traffic_.messages += 1, transfer_traffic_.bytes += 8.0 * double(mine.size());
   } else {
-    int me = 0;
-    MPI_Comm_rank(transfer_comm_, &me);
+    const int me = grid_.rank();  // transfer_comm_ duplicates the grid's communicator
     C.inbox.resize(C.parts.size());
     std::vector<MPI_Request> requests;
     for (std::size_t p = 0; p < C.parts.size(); ++p) {
@@ -566,8 +565,7 @@ void CellMultigrid::scatter(Level& C, std::vector<double>& mine, Pack&& pack) {
   if (!C.active) {
     MPI_Recv(mine.data(), int(count), MPI_DOUBLE, C.part.rank, tag, transfer_comm_, MPI_STATUS_IGNORE);
   } else {
-    int me = 0;
-    MPI_Comm_rank(transfer_comm_, &me);
+    const int me = grid_.rank();  // transfer_comm_ duplicates the grid's communicator
     C.inbox.resize(C.parts.size());
     std::vector<MPI_Request> requests;
     for (std::size_t p = 0; p < C.parts.size(); ++p) {
