@@ -11,9 +11,10 @@ each run's summary.json into speed-up, parallel efficiency and the time per phas
   tools/scaling.py network --out D          (mpirun -n 2; needs python3-mpi4py) this machine's MPI costs,
         t = latency + bytes / bandwidth fitted over 8 B - 1 MB for the all-gather and for the halo's
         MPI_Sendrecv, and a two-double all-reduce, in D/network.json
-  tools/scaling.py iterations CASE.yaml --ranks 4,16,25,64,100 [--steps 3] --out D
+  tools/scaling.py iterations CASE.yaml --ranks 4,16,25,64,100 [--steps 3] [--cuts-from D/balance.json] --out D
         the Poisson's iterations per flow step on P ranks (oversubscribed: counts, not times) in
-        D/iterations.json; the coupled model scales the Poisson's time and messages by them
+        D/iterations.json; the coupled model scales the Poisson's time and messages by them;
+        --cuts-from: on the balanced cuts and grid of a `tessera balance` JSON (the model's)
   tools/scaling.py model CASE.yaml --ranks 2,4,16,64 --out D [--bodies CHECKPOINT] [--cuts balanced] [--png F] [--set ...]
         predicts the loop time on P ranks from D's 1-rank runs, the work per rank that `tessera balance`
         counts for P on one process, and D/network.json; where D holds measured runs on P ranks it
@@ -109,14 +110,26 @@ def iterations(a):
                OMPI_MCA_rmaps_base_oversubscribe="1")
     path = os.path.join(a.out, "iterations.json")
     table = json.load(open(path)) if os.path.exists(path) else {}
+    balanced = {}
+    if a.cuts_from:
+        balanced = {row["ranks"]: row for row in json.load(open(a.cuts_from))["table"]}
+        missing = [p for p in a.ranks if p > 1 and p not in balanced]
+        if missing:
+            sys.exit(f"scaling iterations: {a.cuts_from} has no cuts for {missing} ranks")
     for p in sorted(set([1] + a.ranks)):
         out = os.path.join(a.out, f"iterations_P{p}")
         sets = a.set + [f"run.max_steps={a.steps}", "output.checkpoint_interval=0"]
+        if p > 1 and balanced:
+            row = balanced[p]
+            sets += ["domain.process_grid=[%d,%d,%d]" % tuple(row["grid"]),
+                     "domain.cuts={" + ", ".join(f"{'xyz'[d]}: [{', '.join(repr(c) for c in row['cuts'][d])}]"
+                                                 for d in range(3) if row["cuts"][d]) + "}"]
         cmd = ["mpirun", "-n", str(p), "--bind-to", "none", TESSERA] + tessera_args(a.case, sets, out)
         print(" ".join(shlex.quote(c) for c in cmd), flush=True)
         subprocess.run(cmd, check=True, env=env, stdout=subprocess.DEVNULL)
         s = json.load(open(os.path.join(out, "summary.json")))
         table[str(p)] = {"iterations_per_step": s["poisson"]["iterations_per_step"],
+                         "cuts": "balanced" if p > 1 and balanced else "equal",
                          "coarsest_cells": s["poisson"].get("coarsest_cells", 0),
                          "levels": s["poisson"].get("levels", 0),
                          "gathered_levels": s["poisson"].get("gathered_levels", 0),
@@ -617,6 +630,8 @@ def main():
     p.add_argument("case")
     p.add_argument("--ranks", type=lambda s: [int(x) for x in s.split(",")], required=True)
     p.add_argument("--steps", type=int, default=3)
+    p.add_argument("--cuts-from", help="a `tessera balance` JSON (the model's D/balance.json): each P runs on "
+                   "its balanced cuts and grid, as the model with --cuts balanced takes them")
     p.add_argument("--set", action="append", default=[])
     p.add_argument("--out", default="runs/scaling")
     p = sub.add_parser("report")
