@@ -542,7 +542,8 @@ void CellMultigrid::gather(Level& C, const std::vector<double>& mine, Size&& siz
   } else {
     const int me = grid_.rank();  // transfer_comm_ duplicates the grid's communicator
     C.inbox.resize(C.parts.size());
-    std::vector<MPI_Request> requests;
+    std::vector<MPI_Request>& requests = C.requests;
+    requests.clear();
     for (std::size_t p = 0; p < C.parts.size(); ++p) {
       if (C.parts[p].rank == me) continue;
       C.inbox[p].resize(size(C.parts[p]));
@@ -567,7 +568,8 @@ void CellMultigrid::scatter(Level& C, std::vector<double>& mine, Pack&& pack) {
   } else {
     const int me = grid_.rank();  // transfer_comm_ duplicates the grid's communicator
     C.inbox.resize(C.parts.size());
-    std::vector<MPI_Request> requests;
+    std::vector<MPI_Request>& requests = C.requests;
+    requests.clear();
     for (std::size_t p = 0; p < C.parts.size(); ++p) {
       std::vector<double>& out = C.parts[p].rank == me ? mine : C.inbox[p];
       out.clear();

@@ -86,6 +86,7 @@ class CellMultigrid {
     std::vector<Part> parts;
     std::vector<double> staging;                // this rank's part of a transfer
     std::vector<std::vector<double>> inbox;     // an owner's parts of a transfer
+    std::vector<MPI_Request> requests;          // an owner's transfers in flight
     DM dm = nullptr;
     std::unique_ptr<CellHalo> halo;  // face ghosts, width 1
     std::array<int, 3> n{}, s{}, m{}, gs{}, gm{};
