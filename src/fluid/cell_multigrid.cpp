@@ -159,6 +159,7 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
     }
     if (!any) break;
     gathered = merge[0] || merge[1] || merge[2];
+    parts.clear();
     if (!gathered) continue;
     // Each finer rank's part: the aggregates of its block (`own` holds them per block now).
     auto part_of = [&](const std::array<int, 3>& c) {
@@ -183,7 +184,6 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
     bool owner = active;
     for (int d = 0; d < 3; ++d)
       if (merge[d]) next_coords[d] = coords[d] / 2, owner = owner && coords[d] % 2 == 0;
-    parts.clear();
     if (active) {
       part = part_of(coords);
       part.rank = next_rank_of[std::size_t(linear(next_coords, next_procs))];  // its owner

@@ -98,11 +98,13 @@ TEST(CellMultigrid, OddSizesCoarsenAndTheVCycleIsSymmetricPositive) {
 // One V-cycle applied to the source, on `comm`, as a whole-grid array (x fastest) on every rank of
 // it: each rank writes its own cells, the rest are 0, summed (adding zeros is exact).
 std::vector<double> vcycle_of_source(std::array<int, 3> n, MPI_Comm comm, BoundaryKind x_sides,
-                                     std::array<int, 3> procs = {0, 0, 0}, int* levels = nullptr) {
+                                     std::array<int, 3> procs = {0, 0, 0}, int* levels = nullptr,
+                                     int* gathered = nullptr) {
   Problem P(n, comm, x_sides, procs);
   const FluidGrid& g = P.grid;
   CellMultigrid mg(g);
   if (levels) *levels = mg.levels();
+  if (gathered) *gathered = mg.gathered_levels();
   mg.set_coefficients(P.rho);
   Vec x, y;
   DMCreateGlobalVector(g.pressure_dm(), &x);
@@ -157,21 +159,30 @@ TEST(CellMultigrid, TheVCycleGivesTheSameBitsOnAnyRankCount) {
 // Where the ranks' blocks would fall below 2 cells, the coarser level is gathered onto half the
 // ranks along that direction (theory F9a), so the levels go on as one rank's: 16 x 48 x 48 cells
 // on 4 x 1 x 1 ranks (blocks of 4) take 16 -> 8 (blocks of 2) -> 4 (on 2 ranks) -> 2 (on 1) along
-// x, 4 levels as on one rank, and with blocks that pair up as one rank's the same bits (before,
+// x (one gather on 2 ranks), 4 levels as on one rank, and with blocks that pair up as one rank's the same bits (before,
 // x stopped at 8 cells while y and z went on: 5 levels, other numbers). With walls and with x
-// periodic.
+// periodic; and on 2 x 2 x 1 ranks, 8 x 8 x 96 cells gathered along x and y at once (three parts
+// to one owner): 8 -> 4 (blocks of 2) -> 2 (on 1 rank), one rank's 3 levels.
 TEST(CellMultigrid, SmallBlocksAreGatheredOntoFewerRanksAndKeepOneRanksLevels) {
   int rank, size;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &size);
-  const std::array<int, 3> n{16, 48, 48};
+  struct Split {
+    std::array<int, 3> n, procs;
+    int levels, gathered;  // one rank's levels; the levels gathered on `procs`
+  };
+  std::vector<Split> splits{{{16, 48, 48}, {size, 1, 1}, 4, size == 4 ? 2 : size == 2 ? 1 : 0}};
+  if (size == 4) splits.push_back({{8, 8, 96}, {2, 2, 1}, 3, 1});
+  for (const Split& split : splits)
   for (const BoundaryKind x_sides : {BoundaryKind::no_slip, BoundaryKind::periodic}) {
-    int levels = 0, one_levels = 0;
-    const std::vector<double> ranks = vcycle_of_source(n, MPI_COMM_WORLD, x_sides, {size, 1, 1}, &levels);
+    const std::array<int, 3> n = split.n;
+    int levels = 0, one_levels = 0, gathered = 0;
+    const std::vector<double> ranks = vcycle_of_source(n, MPI_COMM_WORLD, x_sides, split.procs, &levels, &gathered);
+    EXPECT_EQ(gathered, split.gathered);
     if (rank != 0) continue;
     const std::vector<double> one = vcycle_of_source(n, MPI_COMM_SELF, x_sides, {1, 1, 1}, &one_levels);
-    EXPECT_EQ(levels, one_levels) << size << " ranks";
-    EXPECT_EQ(one_levels, 4);
+    EXPECT_EQ(levels, one_levels) << size << " ranks, " << n[0] << " x " << n[1] << " x " << n[2];
+    EXPECT_EQ(one_levels, split.levels);
     std::size_t differ = 0, first = 0;
     for (std::size_t c = 0; c < one.size(); ++c)
       if (ranks[c] != one[c] && differ++ == 0) first = c;
