@@ -103,6 +103,7 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
     L->gathered = gathered;
     L->part = part;
     L->parts = parts;
+    L->inbox.resize(parts.size());
     if (active) {
       check(DMDACreate3d(comm, bt[0], bt[1], bt[2], DMDA_STENCIL_STAR, n[0], n[1], n[2], procs[0], procs[1], procs[2],
                          1, 1, own[0].data(), own[1].data(), own[2].data(), &L->dm),
@@ -541,17 +542,15 @@ void CellMultigrid::gather(Level& C, const std::vector<double>& mine, Size&& siz
     transfer_traffic_.messages += 1, transfer_traffic_.bytes += 8.0 * double(mine.size());
   } else {
     const int me = grid_.rank();  // transfer_comm_ duplicates the grid's communicator
-    C.inbox.resize(C.parts.size());
-    std::vector<MPI_Request>& requests = C.requests;
-    requests.clear();
+    C.requests.clear();
     for (std::size_t p = 0; p < C.parts.size(); ++p) {
       if (C.parts[p].rank == me) continue;
       C.inbox[p].resize(size(C.parts[p]));
-      requests.emplace_back();
+      C.requests.emplace_back();
       MPI_Irecv(C.inbox[p].data(), int(C.inbox[p].size()), MPI_DOUBLE, C.parts[p].rank, tag, transfer_comm_,
-                &requests.back());
+                &C.requests.back());
     }
-    MPI_Waitall(int(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+    MPI_Waitall(int(C.requests.size()), C.requests.data(), MPI_STATUSES_IGNORE);
     for (std::size_t p = 0; p < C.parts.size(); ++p) unpack(C.parts[p], C.parts[p].rank == me ? mine.data() : C.inbox[p].data());
   }
   exchange_seconds_ += MPI_Wtime() - start;
@@ -566,20 +565,18 @@ void CellMultigrid::scatter(Level& C, std::vector<double>& mine, Pack&& pack) {
   if (!C.active) {
     MPI_Recv(mine.data(), int(count), MPI_DOUBLE, C.part.rank, tag, transfer_comm_, MPI_STATUS_IGNORE);
   } else {
-    const int me = grid_.rank();  // transfer_comm_ duplicates the grid's communicator
-    C.inbox.resize(C.parts.size());
-    std::vector<MPI_Request>& requests = C.requests;
-    requests.clear();
+    C.requests.clear();
     for (std::size_t p = 0; p < C.parts.size(); ++p) {
-      std::vector<double>& out = C.parts[p].rank == me ? mine : C.inbox[p];
+      const bool own = C.parts[p].rank == grid_.rank();  // transfer_comm_ duplicates the grid's
+      std::vector<double>& out = own ? mine : C.inbox[p];
       out.clear();
       pack(C.parts[p], out);
-      if (C.parts[p].rank == me) continue;
-      requests.emplace_back();
-      MPI_Isend(out.data(), int(out.size()), MPI_DOUBLE, C.parts[p].rank, tag, transfer_comm_, &requests.back());
+      if (own) continue;
+      C.requests.emplace_back();
+      MPI_Isend(out.data(), int(out.size()), MPI_DOUBLE, C.parts[p].rank, tag, transfer_comm_, &C.requests.back());
       transfer_traffic_.messages += 1, transfer_traffic_.bytes += 8.0 * double(out.size());
     }
-    MPI_Waitall(int(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+    MPI_Waitall(int(C.requests.size()), C.requests.data(), MPI_STATUSES_IGNORE);
   }
   exchange_seconds_ += MPI_Wtime() - start;
 }
