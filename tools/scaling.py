@@ -284,6 +284,24 @@ def network(a):
             comm.Sendrecv(out, dest=other, recvbuf=back, source=other)
         dt = (MPI.Wtime() - t) / reps
         swaps.append((8.0 * size, comm.allreduce(dt, op=MPI.MAX)))
+    # The cell halo's exchange (fluid/cell_halo.hpp): one message to each neighbour rank, all in
+    # flight together; here k small messages (8 doubles) each way at once to the other rank, so that
+    # t(k) = t(1) + (k - 1) overhead gives each further message's cost.
+    flights = []
+    for k in (1, 2, 4, 8, 16, 26):
+        outs, backs = [np.zeros(8) for _ in range(k)], [np.zeros(8) for _ in range(k)]
+
+        def exchange():
+            reqs = [comm.Irecv(backs[i], source=other, tag=i) for i in range(k)]
+            reqs += [comm.Isend(outs[i], dest=other, tag=i) for i in range(k)]
+            MPI.Request.Waitall(reqs)
+        for _ in range(50):
+            exchange()
+        comm.Barrier()
+        t = MPI.Wtime()
+        for _ in range(2000):
+            exchange()
+        flights.append((k, comm.allreduce((MPI.Wtime() - t) / 2000, op=MPI.MAX)))
     # The DEM's per-step check (two doubles, MPI_MAX).
     two = np.zeros(2)
     for _ in range(100):
@@ -299,7 +317,9 @@ def network(a):
             return float(intercept), float(1 / slope)
         lat, bw = fit(rows)
         p2p_lat, p2p_bw = fit(swaps)
-        json.dump({"ranks": comm.size, "latency_s": lat, "bandwidth_bytes_per_s": bw,
+        overhead = float(np.polyfit(np.array([r[0] for r in flights]), np.array([r[1] for r in flights]), 1)[0])
+        json.dump({"message_overhead_s": overhead,
+                   "in_flight_samples": [{"messages_each_way": r[0], "seconds": r[1]} for r in flights],"ranks": comm.size, "latency_s": lat, "bandwidth_bytes_per_s": bw,
                    "sendrecv_latency_s": p2p_lat, "sendrecv_bandwidth_bytes_per_s": p2p_bw,
                    "allreduce_s": allreduce,
                    "samples": [{"bytes_received": r[0], "seconds": r[1]} for r in rows],
@@ -449,6 +469,10 @@ def dem_model(a, b, runs, net):
     cuts = "load_balanced" if a.cuts == "balanced" else "load_equal"
     B, C = float(b["count"]), row1[cuts]["total_pairs"]
     lat, bw, red = net["sendrecv_latency_s"], net["sendrecv_bandwidth_bytes_per_s"], net["allreduce_s"]
+    if "message_overhead_s" not in net:
+        print("scaling model: network.json predates the messages-in-flight measurement; each further message "
+              "of an exchange counted as free (run `network` again)")
+    overhead = net.get("message_overhead_s", 0.0)
     print(f"model: {b['case']}, {b['count']} bodies, {C:.0f} listed pairs (skin {b['skin']:.3g} m), {steps} steps, "
           f"{a.cuts} cuts; 1 rank {t1:.2f} s = contacts {contact:.2f} + per body {per_body:.2f} + lists "
           f"{per_local:.2f} + rest {rest:.2f}; swap {1e6 * lat:.2f} us + bytes / {bw / 1e9:.2f} GB/s, "
@@ -485,8 +509,9 @@ def coupled_model(a, b, runs, net):
     the fluid force with the cells they report (an older `tessera balance`: both per laid-out body);
     each costed by the 1-rank run's timers. Then the
     exchanges: the field and multigrid halos (their exchanges per flow step, and bytes per face cell,
-    from the 2-rank run's per-rank traffic; at P each exchange pays one latency per split direction
-    plus the busiest rank's face bytes over the bandwidth), the Poisson's 3 reductions per Krylov
+    from the 2-rank run's per-rank traffic; at P each exchange is one round of messages to every
+    neighbour rank, faces, edges and corners: one latency, network.json's overhead for each further
+    message, and the busiest rank's face and edge bytes over the bandwidth), the Poisson's 3 reductions per Krylov
     iteration, and per DEM sub-step dem_model's swaps and list check, plus 6 swaps of the bodies' sums
     per flow step (C3's loads, C4a's sums and velocities, C7's moves, the ghosts' refresh). Where
     D/iterations.json counts the Poisson's iterations on P ranks, the Poisson's time, its reductions
@@ -556,6 +581,10 @@ def coupled_model(a, b, runs, net):
                 for k in ("field", "multigrid")}
     iters = one["poisson"]["iterations_per_step"]
     lat, bw, red = net["sendrecv_latency_s"], net["sendrecv_bandwidth_bytes_per_s"], net["allreduce_s"]
+    if "message_overhead_s" not in net:
+        print("scaling model: network.json predates the messages-in-flight measurement; each further message "
+              "of an exchange counted as free (run `network` again)")
+    overhead = net.get("message_overhead_s", 0.0)
     print(f"model: {b['case']}, {int(N)} cells, {b['count']} bodies, {C:.0f} listed pairs, {steps} flow steps of "
           f"{L:.1f} sub-steps; 1 rank {t1:.2f} s = flow {flow:.2f} + cells' coupling {cellwise:.2f} + bodies' "
           f"coupling {bodywise:.2f} + DEM {contact + per_body + per_list + per_local + dem_rest:.2f} + rest {rest:.2f}; per flow "
@@ -590,8 +619,20 @@ def coupled_model(a, b, runs, net):
             # The busiest rank's face along each split direction (cells of the other two directions).
             face = {d: max(slabs[(d + 1) % 3][i] * slabs[(d + 2) % 3][j] for i in range(dims[(d + 1) % 3])
                            for j in range(dims[(d + 2) % 3])) for d in range(3) if dims[d] > 1}
-            halo = sum(msgs[k] * (ratio if k == "multigrid" else 1.0) * sum(lat + per_face[k] * f / bw for f in face.values())
-                       for k in ("field", "multigrid"))
+            # An exchange is one round (fluid/cell_halo.hpp): a message to each neighbour rank,
+            # across faces, edges and corners (both halos are two layers deep, box: the multigrid's
+            # where its blocks allow), all in flight together: one latency, each further message's
+            # overhead, and the bytes the busiest rank sends (2 faces a split direction, and the
+            # edges, 2 x 2 cells across, along the third direction's longest block).
+            sides = {d: min(2, dims[d] - 1) for d in face}
+            neighbours = math.prod(1 + n for n in sides.values()) - 1
+            units = sum(sides[d] * f for d, f in face.items())
+            for d1 in face:
+                for d2 in face:
+                    if d1 < d2:
+                        units += sides[d1] * sides[d2] * 2 * max(slabs[3 - d1 - d2])
+            halo = sum(msgs[k] * (ratio if k == "multigrid" else 1.0) *
+                       (lat + (neighbours - 1) * overhead + per_face[k] * units / bw) for k in ("field", "multigrid"))
             reductions = 3 * iters * ratio * math.ceil(math.log2(p)) * red
             if count and count.get("coarsest_cells") and "latency_s" in net:
                 # The coarsest level's LU on every rank: one all-gather of its right-hand side a cycle.

@@ -2,15 +2,16 @@
 // The ghost exchange of arrays laid out over a rank's ghosted box of a Cartesian process grid
 // (the flow fields, FluidGrid; the multigrid's levels, CellMultigrid; docs/theory.md F11a).
 //
-// Direction by direction (x, then y, then z), each rank sends the `width` owned layers on each side
-// to the neighbour there and receives that neighbour's into its ghost layers; a direction with one
-// rank and periodic copies its own far layers. With the box stencil, the layers sent along a later
-// direction include the ghosts the earlier directions filled (where a neighbour rank or periodic
-// image exists along them), so edges and corners arrive in two or three hops; with the star stencil
-// only the face ghosts are filled. A ghost beyond a wall or an outflow is never written, as in a
-// PETSc DMDA's DMLocalToLocal with DM_BOUNDARY_GHOSTED, which this replaces: that one's scatter
-// also copied every owned value onto itself through an index list, which cost the flow a tenth of its
-// time on 2 ranks (docs/performance.md, 2026-12-03). Several fields go in one message per side.
+// In one round: each rank sends every neighbour rank (across a face, and, with the box stencil,
+// across an edge or a corner too) the owned cells its ghosts image, all in one message per
+// neighbour rank, all messages in flight together, and writes what it receives into its ghost
+// layers `width` deep; where the neighbour along a periodic direction is the rank itself, it copies
+// its own far layers. With the star stencil only the face ghosts are filled. A ghost beyond a wall
+// or an outflow is never written, as in a PETSc DMDA's DMLocalToLocal with DM_BOUNDARY_GHOSTED,
+// which this replaces: that one's scatter also copied every owned value onto itself through an
+// index list, which cost the flow a tenth of its time on 2 ranks (docs/performance.md, 2026-12-03).
+// Several fields go in the same messages. (Until 2026-12-05 the exchange went direction by
+// direction, the edges and corners in two or three hops: one latency per split direction.)
 #pragma once
 #include <mpi.h>
 
@@ -40,7 +41,7 @@ class CellHalo {
   bool active() const { return active_; }
   // Whether an exchange fills the ghost layers on `side` (0 low, 1 high) of direction d (a
   // neighbour rank or a periodic image lies there; not a wall or an outflow).
-  bool fills(int d, int side) const { return sides_[d][side].rank >= 0; }
+  bool fills(int d, int side) const { return fills_[d][side]; }
   // Fills the ghosts of every field (collective over the communicator).
   void exchange(std::initializer_list<std::vector<double>*> fields) const;
 
@@ -62,9 +63,12 @@ class CellHalo {
     std::array<int, 3> lo{}, hi{};
     std::size_t size() const { return std::size_t(hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]); }
   };
-  struct Side {
-    int rank = -1;  // MPI_PROC_NULL-like: -1 where a wall or an outflow lies beyond
-    Box send, recv;
+  // A neighbour rank (or this rank, for a periodic image of itself): the owned boxes it is sent,
+  // and the ghost boxes its message fills, each list in the sender's order of the offsets.
+  struct Peer {
+    int rank = -1;
+    std::vector<Box> send, recv;
+    std::size_t send_size = 0, recv_size = 0;  // cells, all boxes
   };
   template <class F>
   void for_rows(const Box& b, F&& fn) const;
@@ -75,8 +79,10 @@ class CellHalo {
   int me_ = 0;
   bool active_ = false;
   std::array<std::ptrdiff_t, 3> stride_{};
-  std::array<std::array<Side, 2>, 3> sides_{};
-  mutable std::array<std::vector<double>, 2> send_buf_, recv_buf_;
+  std::array<std::array<bool, 2>, 3> fills_{};
+  std::vector<Peer> peers_;  // other ranks first, then this rank's own images
+  mutable std::vector<std::vector<double>> send_buf_, recv_buf_;
+  mutable std::vector<MPI_Request> requests_;
   mutable Traffic traffic_;
 };
 

@@ -63,8 +63,8 @@ struct Box {
 
 }  // namespace
 
-CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coarse, bool coarse_direct)
-    : grid_(grid), pre_(pre), post_(post), coarse_(coarse), coarse_direct_(coarse_direct) {
+CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coarse, bool coarse_direct, int ghost_layers)
+    : grid_(grid), pre_(pre), post_(post), coarse_(coarse), ghost_layers_(ghost_layers), coarse_direct_(coarse_direct) {
   DM fine = grid.pressure_dm();
   PetscInt M, N, P, pm, pn, pp;
   check(DMDAGetInfo(fine, nullptr, &M, &N, &P, &pm, &pn, &pp, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr),
@@ -88,8 +88,6 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
   std::vector<Level::Part> parts;
   std::array<int, 3> n{int(M), int(N), int(P)};
   std::array<std::vector<int>, 3> fine_start;  // of the level being made; empty for the finest
-  DMBoundaryType bt[3];
-  for (int d = 0; d < 3; ++d) bt[d] = grid.periodic(d) ? DM_BOUNDARY_PERIODIC : DM_BOUNDARY_GHOSTED;
   while (true) {
     auto L = std::make_unique<Level>();
     L->n = n;
@@ -105,17 +103,23 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
     L->parts = parts;
     L->inbox.resize(parts.size());
     if (active) {
-      check(DMDACreate3d(comm, bt[0], bt[1], bt[2], DMDA_STENCIL_STAR, n[0], n[1], n[2], procs[0], procs[1], procs[2],
-                         1, 1, own[0].data(), own[1].data(), own[2].data(), &L->dm),
-            "DMDACreate3d (multigrid level)");
-      check(DMSetUp(L->dm), "DMSetUp");
-      PetscInt xs, ys, zs, xm, ym, zm, gxs, gys, gzs, gxm, gym, gzm;
-      check(DMDAGetCorners(L->dm, &xs, &ys, &zs, &xm, &ym, &zm), "DMDAGetCorners");
-      check(DMDAGetGhostCorners(L->dm, &gxs, &gys, &gzs, &gxm, &gym, &gzm), "DMDAGetGhostCorners");
-      L->s = {int(xs), int(ys), int(zs)};
-      L->m = {int(xm), int(ym), int(zm)};
-      L->gs = {int(gxs), int(gys), int(gzs)};
-      L->gm = {int(gxm), int(gym), int(gzm)};
+      // Two ghost layers where every block along each direction with a neighbour (a rank, or a
+      // periodic image) is at least 2 cells across: the layers sent are owned cells.
+      L->layers = 1;
+      if (ghost_layers_ >= 2) {
+        L->layers = 2;
+        for (int d = 0; d < 3; ++d)
+          if (procs[d] > 1 || grid.periodic(d))
+            for (PetscInt c : own[d]) L->layers = c < 2 ? 1 : L->layers;
+      }
+      const int w = L->layers;
+      for (int d = 0; d < 3; ++d) {
+        L->s[d] = 0;
+        for (int c = 0; c < coords[d]; ++c) L->s[d] += int(own[d][std::size_t(c)]);
+        L->m[d] = int(own[d][std::size_t(coords[d])]);
+        L->gs[d] = L->s[d] - w;  // ghosts on every side, beyond a domain face too (left at 0 there)
+        L->gm[d] = L->m[d] + 2 * w;
+      }
       L->stride = {1, L->gm[0], std::ptrdiff_t(L->gm[0]) * L->gm[1]};
       CellHalo::Block block;
       block.procs = procs;
@@ -125,7 +129,12 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
       block.m = L->m;
       block.gs = L->gs;
       block.gm = L->gm;
-      L->halo = std::make_unique<CellHalo>(comm, block, 1, CellHalo::Stencil::star);
+      L->halo = std::make_unique<CellHalo>(comm, block, w, w == 1 ? CellHalo::Stencil::star : CellHalo::Stencil::box);
+      if (w == 2) {
+        for (int d = 0; d < 3; ++d)
+          if (!L->halo->fills(d, 1)) block.m[d] += 1;  // the high domain face's coefficients
+        L->face_halo = std::make_unique<CellHalo>(comm, block, w, CellHalo::Stencil::box);
+      }
       const std::size_t size = std::size_t(L->gm[0]) * L->gm[1] * L->gm[2];
       for (auto& c : L->coef) c.assign(size, 0.0f);
       if (levels_.empty())
@@ -221,17 +230,36 @@ CellMultigrid::~CellMultigrid() {
   if (coarse_A_) MatDestroy(&coarse_A_);
   if (coarse_b_) VecDestroy(&coarse_b_);
   if (coarse_x_) VecDestroy(&coarse_x_);
-  for (auto& L : levels_)
-    if (L->dm) DMDestroy(&L->dm);
   for (MPI_Comm& c : level_comms_) MPI_Comm_free(&c);
   if (transfer_comm_ != MPI_COMM_NULL) MPI_Comm_free(&transfer_comm_);
 }
 
-void CellMultigrid::exchange(Level& L, std::vector<double>& v) {
+void CellMultigrid::exchange(Level& L, std::initializer_list<std::vector<double>*> fields) {
   if (!L.halo || !L.halo->active()) return;  // one rank, nothing periodic: no ghost has a source
   const double start = MPI_Wtime();
-  L.halo->exchange({&v});
+  L.halo->exchange(fields);
   exchange_seconds_ += MPI_Wtime() - start;
+}
+
+void CellMultigrid::exchange_coefficients(Level& L) {
+  if (!L.face_halo || !L.face_halo->active()) return;
+  const double start = MPI_Wtime();
+  std::array<std::vector<double>, 3> c;  // single precision is exact in double and back
+  for (int d = 0; d < 3; ++d) c[d].assign(L.coef[d].begin(), L.coef[d].end());
+  L.face_halo->exchange({&c[0], &c[1], &c[2]});
+  for (int d = 0; d < 3; ++d) std::copy(c[d].begin(), c[d].end(), L.coef[d].begin());
+  exchange_seconds_ += MPI_Wtime() - start;
+  // The first ghost layer's inverse diagonal, as its owner computes it.
+  std::array<int, 3> s, m;
+  for (int d = 0; d < 3; ++d) {
+    s[d] = L.s[d] - (L.halo->fills(d, 0) ? 1 : 0);
+    m[d] = L.m[d] + (L.s[d] - s[d]) + (L.halo->fills(d, 1) ? 1 : 0);
+  }
+  for_owned(s, m, [&](int i, int j, int k) {
+    const std::size_t c = L.at(i, j, k);
+    const double sum = coefficient_sum(L, c);
+    L.inv_diag[c] = float(sum > 0 ? 1 / sum : 1.0);
+  });
 }
 
 void CellMultigrid::set_coefficients(const std::vector<double>& rho, bool coarse) {
@@ -323,6 +351,7 @@ void CellMultigrid::set_coefficients(const std::vector<double>& rho, bool coarse
       const double s = coefficient_sum(L, c);
       L.inv_diag[c] = float(s > 0 ? 1 / s : 1.0);
     });
+    exchange_coefficients(L);
   }
   if (coarse && coarse_direct_ && levels_.back()->active) assemble_coarsest();
 }
@@ -457,7 +486,7 @@ void CellMultigrid::solve_coarsest() {
   check(VecRestoreArrayRead(coarse_x_, &x), "VecRestoreArrayRead");
 }
 
-void CellMultigrid::smooth(Level& L, int sweeps, bool reverse, bool from_zero, bool last_exchange) {
+void CellMultigrid::smooth(Level& L, int sweeps, bool reverse, bool from_zero, bool ghosts_after) {
   const float* const cf[3] = {L.coef[0].data(), L.coef[1].data(), L.coef[2].data()};
   const float* const inv = L.inv_diag.data();
   const double* const b = L.b.data();
@@ -478,7 +507,7 @@ void CellMultigrid::smooth(Level& L, int sweeps, bool reverse, bool from_zero, b
   };
   // From x = 0, the first colour's cells of a row take b / diag and the others 0: every owned
   // cell is written, so x needs no clearing (its ghosts beyond the domain stay 0).
-  auto first = [&](int j, int k, int colour) {
+  auto first_pass = [&](int j, int k, int colour) {
     const std::size_t row = L.at(s[0], j, k);
     const int parity = (s[0] + j + k) & 1;
     for (int i = 0; i < L.m[0]; ++i)
@@ -488,10 +517,15 @@ void CellMultigrid::smooth(Level& L, int sweeps, bool reverse, bool from_zero, b
   // every side whose ghosts an exchange fills (a neighbour rank or a periodic image), pass p reads
   // only cells that pass p - 1 has reached in the same stream, if it trails pass p - 1 by a plane:
   // all the sweeps' passes go down the level in one stream, each a plane behind the one before.
-  // The shells left (depth < p) take pass p after an exchange, in pass order. Every cell reads the
-  // same values as in separate passes with an exchange after each: the same numbers, with as
-  // many exchanges, and the level streamed once instead of once a pass.
+  // The shells left (depth < p) take pass p in pass order, after an exchange where the ghosts they
+  // read are not yet current. With one ghost layer that is every pass. With two, an exchange
+  // brings the neighbours' two outer layers, whose cells of the pass's colour then hold the pass
+  // before's values; the pass updates the first ghost layer too (its cells read only the
+  // exchanged layers and their own), and the next pass needs no exchange: one exchange a sweep.
+  // Every cell reads the same values as in separate passes with an exchange after each: the same
+  // numbers, and the level streamed once instead of once a pass.
   const int passes = 2 * sweeps;
+  const int w = L.layers;
   std::array<int, 3> fill_lo{}, fill_hi{};
   for (int d = 0; d < 3; ++d) {
     fill_lo[d] = L.halo->fills(d, 0) ? 1 : 0;
@@ -504,7 +538,32 @@ void CellMultigrid::smooth(Level& L, int sweeps, bool reverse, bool from_zero, b
       hi[d] = std::max(lo[d], e[d] - p * fill_hi[d]);
     }
   };
+  // The first ghost layer, on the sides an exchange fills (edges and corners included).
+  auto ghost_layer = [&](int colour) {
+    for (int k = s[2] - fill_lo[2]; k < e[2] + fill_hi[2]; ++k)
+      for (int j = s[1] - fill_lo[1]; j < e[1] + fill_hi[1]; ++j) {
+        if (k < s[2] || k >= e[2] || j < s[1] || j >= e[1]) {
+          update(s[0] - fill_lo[0], e[0] + fill_hi[0], j, k, colour);
+        } else {
+          if (fill_lo[0]) update(s[0] - 1, s[0], j, k, colour);
+          if (fill_hi[0]) update(e[0], e[0] + 1, j, k, colour);
+        }
+      }
+  };
   auto colour_of = [&](int p) { return (p & 1) == (reverse ? 1 : 0) ? 0 : 1; };
+  // The passes that follow an exchange: from zero, pass 1 (pass 0 reads no neighbour), 1 + w, ...;
+  // else pass 0 (after the correction), w, 2 w, ...
+  const int first = from_zero ? 1 : 0;
+  auto after_exchange = [&](int p) { return p >= first && (p - first) % w == 0; };
+  // From zero, the first exchange also brings the right-hand side's ghosts (the ghost layer's
+  // updates read them; they stay current until the level's next right-hand side).
+  auto exchange_before = [&](int p) {
+    if (from_zero && p == first && w == 2)
+      exchange(L, {&L.x, &L.b});
+    else
+      exchange(L, {&L.x});
+  };
+  if (!from_zero && passes > 0) exchange_before(0);
   std::array<int, 3> lo{}, hi{};
   for (int k = s[2]; k < e[2] + passes - 1; ++k)
     for (int p = 0; p < passes; ++p) {
@@ -512,13 +571,19 @@ void CellMultigrid::smooth(Level& L, int sweeps, bool reverse, bool from_zero, b
       deep(p, lo, hi);
       if (kp < lo[2] || kp >= hi[2]) continue;
       if (p == 0 && from_zero) {
-        for (int j = s[1]; j < e[1]; ++j) first(j, kp, colour_of(0));
+        for (int j = s[1]; j < e[1]; ++j) first_pass(j, kp, colour_of(0));
         continue;
       }
       for (int j = lo[1]; j < hi[1]; ++j) update(lo[0], hi[0], j, kp, colour_of(p));
     }
+  // Pass 0 without an exchange since: its ghost layer reads the prolonged values beside it, which
+  // only pass 1's shell changes.
+  if (!from_zero && passes > 0 && w == 2) ghost_layer(colour_of(0));
   for (int p = 1; p < passes; ++p) {
-    exchange(L, L.x);
+    if (after_exchange(p)) {
+      exchange_before(p);
+      if (w == 2) ghost_layer(colour_of(p));
+    }
     deep(p, lo, hi);
     for (int k = s[2]; k < e[2]; ++k)
       for (int j = s[1]; j < e[1]; ++j) {
@@ -530,7 +595,9 @@ void CellMultigrid::smooth(Level& L, int sweeps, bool reverse, bool from_zero, b
         }
       }
   }
-  if (last_exchange) exchange(L, L.x);
+  // The first ghost layer holds both colours' last values where the last pass followed an
+  // exchange (two layers); else one more exchange.
+  if (ghosts_after && passes > 0 && !(w == 2 && after_exchange(passes - 1))) exchange(L, {&L.x});
 }
 
 template <class Size, class Unpack>
@@ -644,16 +711,15 @@ void CellMultigrid::cycle(std::size_t l) {
       solve_coarsest();
       return;
     }
-    smooth(L, coarse_ / 2, false, true);
+    smooth(L, coarse_ / 2, false, true, false);
     smooth(L, coarse_ / 2, true, false, false);
     return;
   }
-  smooth(L, pre_, false, true);
+  smooth(L, pre_, false, true, true);  // the restriction reads the first ghost layer
   Level& C = *levels_[l + 1];
   restrict_residual(L, C);
   if (C.active) cycle(l + 1);  // else its owner's correction comes back in the prolongation
   prolong(C, L);
-  exchange(L, L.x);
   // The coarser level reads only owned cells of this one, and apply() copies only owned cells out.
   smooth(L, post_, true, false, false);
 }
@@ -665,7 +731,7 @@ void CellMultigrid::apply_operator(Vec xin, Vec yout) {
   check(VecGetArrayRead(xin, &in), "VecGetArrayRead");
   for_rows(F, [&](std::size_t row, std::size_t n) { std::copy(in + n, in + n + nx, F.x.data() + row); });
   check(VecRestoreArrayRead(xin, &in), "VecRestoreArrayRead");
-  exchange(F, F.x);
+  exchange(F, {&F.x});
   PetscScalar* out;
   check(VecGetArray(yout, &out), "VecGetArray");
   const double* const cx = F.op_coef[0].data();

@@ -23,8 +23,9 @@
 // preconditioner; the operator CG iterates on (apply_operator) keeps the double coefficients. Red-black sweeps give the same numbers on any rank
 // count (the aggregates, and so the preconditioner, follow the ranks' blocks).
 //
-// Each level lives on its own DMDA with each block's aggregate count as ownership ranges (ghost
-// width 1, face ghosts filled by fluid/cell_halo.hpp). Where a direction's blocks would fall below
+// Each level's blocks are each rank's aggregates; their ghosts are filled by fluid/cell_halo.hpp,
+// two layers deep where every split block is at least 2 cells across, so that a red-black sweep
+// needs one exchange instead of two (theory F9a), else one. Where a direction's blocks would fall below
 // 2 cells on several ranks, the coarser level is gathered: pairs of ranks along that direction
 // hand their aggregates to the first of the pair, which owns both parts from there down (the
 // others wait for its correction), so every direction coarsens on as on one rank (theory F9a).
@@ -35,6 +36,7 @@
 #include <petscksp.h>
 
 #include <array>
+#include <initializer_list>
 #include <memory>
 #include <vector>
 
@@ -46,8 +48,11 @@ namespace tessera {
 class CellMultigrid {
  public:
   // coarse_direct: the coarsest level solved exactly (LU, every rank a copy); else coarse_sweeps.
+  // ghost_layers: 2 lets a smoothing sweep's two passes follow one exchange where every split
+  // block is at least 2 cells across (else a level keeps 1 layer and an exchange per pass); 1
+  // everywhere exchanges before every pass. The same numbers either way.
   CellMultigrid(const FluidGrid& grid, int pre_sweeps = 2, int post_sweeps = 2, int coarse_sweeps = 20,
-                bool coarse_direct = true);
+                bool coarse_direct = true, int ghost_layers = 2);
   ~CellMultigrid();
   CellMultigrid(const CellMultigrid&) = delete;
   CellMultigrid& operator=(const CellMultigrid&) = delete;
@@ -87,8 +92,14 @@ class CellMultigrid {
     std::vector<double> staging;                // this rank's part of a transfer
     std::vector<std::vector<double>> inbox;     // an owner's parts of a transfer
     std::vector<MPI_Request> requests;          // an owner's transfers in flight
-    DM dm = nullptr;
-    std::unique_ptr<CellHalo> halo;  // face ghosts, width 1
+    // Ghost layers (theory F9a): 1, face ghosts, an exchange before every red-black pass; or 2,
+    // edges and corners too, the first layer's cells updated like owned ones after an exchange,
+    // so that a sweep's two passes need one exchange.
+    int layers = 1;
+    std::unique_ptr<CellHalo> halo;
+    // With 2 layers, the face coefficients' exchange: the owned box reaches the high domain faces
+    // along the unsplit directions, so the ghost cells get their boundary faces too.
+    std::unique_ptr<CellHalo> face_halo;
     std::array<int, 3> n{}, s{}, m{}, gs{}, gm{};
     std::array<std::ptrdiff_t, 3> stride{};
     // Along each direction, the first cell of the next finer level's aggregate I, global,
@@ -108,12 +119,16 @@ class CellMultigrid {
       return (std::size_t(k - gs[2]) * gm[1] + std::size_t(j - gs[1])) * gm[0] + std::size_t(i - gs[0]);
     }
   };
-  void exchange(Level& L, std::vector<double>& v);
+  void exchange(Level& L, std::initializer_list<std::vector<double>*> fields);
+  // With 2 layers: the face coefficients of the ghost cells from their owners, and the inverse
+  // diagonal of the first ghost layer's cells computed from them (the same bits as their owner's).
+  void exchange_coefficients(Level& L);
   // Red-black sweeps, all passes in one stream down the level, each a plane behind the one before,
-  // the cells beside exchanged ghosts after an exchange per pass (theory F9a); `from_zero`: x
-  // starts at 0 (its first pass reads no neighbour); the exchange after the last pass is left out
-  // where `last_exchange` is false (no ghost is read next).
-  void smooth(Level& L, int sweeps, bool reverse, bool from_zero = false, bool last_exchange = true);
+  // the cells beside exchanged ghosts after an exchange per pass, or with 2 ghost layers per two
+  // passes (theory F9a). `from_zero`: x starts at 0 (its first pass reads no neighbour); else the
+  // ghosts are exchanged first. `ghosts_after`: the first ghost layer holds the last pass's
+  // values at the end (the residual reads it).
+  void smooth(Level& L, int sweeps, bool reverse, bool from_zero, bool ghosts_after);
   // The residual b - A x of level l, summed into the next coarser level's b (restriction).
   void restrict_residual(Level& L, Level& C);
   // The coarser level's correction added to each of its aggregate's cells (prolongation).
@@ -140,6 +155,7 @@ class CellMultigrid {
 
   const FluidGrid& grid_;
   int pre_, post_, coarse_;
+  int ghost_layers_;
   bool coarse_direct_;
   Mat coarse_A_ = nullptr;
   KSP coarse_ksp_ = nullptr;
