@@ -133,9 +133,13 @@ def iterations(a):
                          "coarsest_cells": s["poisson"].get("coarsest_cells", 0),
                          "levels": s["poisson"].get("levels", 0),
                          "gathered_levels": s["poisson"].get("gathered_levels", 0),
+                         "two_layer_levels": s["poisson"].get("two_layer_levels", 0),
+                         "exchanges_per_cycle": s["poisson"].get("exchanges_per_cycle", 0),
                          "process_grid": s.get("process_grid"), "steps": s["steps"]}
         print(f"{p} ranks {s.get('process_grid')}: {table[str(p)]['iterations_per_step']:.2f} iterations a step, "
-              f"{table[str(p)]['levels']} levels ({table[str(p)]['gathered_levels']} gathered onto fewer ranks), "
+              f"{table[str(p)]['levels']} levels ({table[str(p)]['gathered_levels']} gathered onto fewer ranks, "
+              f"{table[str(p)]['two_layer_levels']} with two ghost layers; "
+              f"{table[str(p)]['exchanges_per_cycle']:.1f} exchanges a cycle), "
               f"the coarsest {table[str(p)]['coarsest_cells']} cells", flush=True)
     os.makedirs(a.out, exist_ok=True)
     with open(path, "w") as f:
@@ -515,7 +519,8 @@ def coupled_model(a, b, runs, net):
     iteration, and per DEM sub-step dem_model's swaps and list check, plus 6 swaps of the bodies' sums
     per flow step (C3's loads, C4a's sums and velocities, C7's moves, the ghosts' refresh). Where
     D/iterations.json counts the Poisson's iterations on P ranks, the Poisson's time, its reductions
-    and the multigrid's exchanges scale by their ratio to 1 rank's, each cycle's coarsest-level
+    and the multigrid's exchanges scale by their ratio to 1 rank's (and by the exchanges a V-cycle at P
+    over the 2-rank run's, where both summaries count them: levels with two ghost layers take half), each cycle's coarsest-level
     LU adds an all-gather of that level, and each level gathered onto fewer ranks two point-to-point
     latencies a cycle (its parts in, their corrections out)."""
     if "sendrecv_latency_s" not in net:
@@ -631,7 +636,12 @@ def coupled_model(a, b, runs, net):
                 for d2 in face:
                     if d1 < d2:
                         units += sides[d1] * sides[d2] * 2 * max(slabs[3 - d1 - d2])
-            halo = sum(msgs[k] * (ratio if k == "multigrid" else 1.0) *
+            # The multigrid's exchanges scale with the iterations and with its exchanges a cycle
+            # (two ghost layers on a level halve them; which levels have two depends on P).
+            per_cycle = 1.0
+            if count and count.get("exchanges_per_cycle") and two["poisson"].get("exchanges_per_cycle"):
+                per_cycle = count["exchanges_per_cycle"] / two["poisson"]["exchanges_per_cycle"]
+            halo = sum(msgs[k] * (ratio * per_cycle if k == "multigrid" else 1.0) *
                        (lat + (neighbours - 1) * overhead + per_face[k] * units / bw) for k in ("field", "multigrid"))
             reductions = 3 * iters * ratio * math.ceil(math.log2(p)) * red
             if count and count.get("coarsest_cells") and "latency_s" in net:
@@ -646,6 +656,7 @@ def coupled_model(a, b, runs, net):
             exchange = steps * (halo + reductions + dem)
         rows.append({"ranks": p, "grid": dims, "compute": compute, "exchange": exchange, "stages": stages,
                      "predicted": compute + exchange, "measured": median_loop(runs, p), "iteration_ratio": ratio,
+                     "exchanges_per_cycle_ratio": per_cycle if p > 1 else 1.0,
                      "iterations_from": None if count is None else count.get("process_grid")})
     return rows
 

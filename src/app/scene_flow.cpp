@@ -540,7 +540,9 @@ void FlowScene::summarise(nlohmann::json& s) {
                   {"max_iterations", max_iterations_},
                   {"coarsest_cells", flow_->poisson_coarsest_cells()},
                   {"levels", flow_->poisson_levels()},
-                  {"gathered_levels", flow_->poisson_gathered_levels()}};
+                  {"gathered_levels", flow_->poisson_gathered_levels()},
+                  {"two_layer_levels", flow_->poisson_two_layer_levels()},
+                  {"exchanges_per_cycle", flow_->poisson_exchanges_per_cycle()}};
   s["dt_limits"] = limits_;
   s["cell_steps_per_second_per_core"] =
       double(cells) * steps_run / std::max(s["loop_seconds"].get<double>(), 1e-9) / decomp_->size();

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <string>
 #include <tuple>
+#include <type_traits>
 
 #include "core/errors.hpp"
 
@@ -121,21 +122,30 @@ void CellHalo::for_rows(const Box& b, F&& fn) const {
     for (int j = b.lo[1]; j < b.hi[1]; ++j) fn(b.lo[0] + j * stride_[1] + k * stride_[2], row);
 }
 
-void CellHalo::pack(const Box& b, const std::vector<double>& f, double* out) const {
+template <class T>
+void CellHalo::pack(const Box& b, const std::vector<T>& f, double* out) const {
   for_rows(b, [&](std::ptrdiff_t c, std::size_t n) {
-    std::memcpy(out, f.data() + c, n * sizeof(double));
+    if constexpr (std::is_same_v<T, double>)
+      std::memcpy(out, f.data() + c, n * sizeof(double));
+    else
+      std::copy(f.data() + c, f.data() + c + n, out);
     out += n;
   });
 }
 
-void CellHalo::unpack(const Box& b, std::vector<double>& f, const double* in) const {
+template <class T>
+void CellHalo::unpack(const Box& b, std::vector<T>& f, const double* in) const {
   for_rows(b, [&](std::ptrdiff_t c, std::size_t n) {
-    std::memcpy(f.data() + c, in, n * sizeof(double));
+    if constexpr (std::is_same_v<T, double>)
+      std::memcpy(f.data() + c, in, n * sizeof(double));
+    else
+      for (std::size_t i = 0; i < n; ++i) f[std::size_t(c) + i] = T(in[i]);
     in += n;
   });
 }
 
-void CellHalo::exchange(std::initializer_list<std::vector<double>*> fields) const {
+template <class T>
+void CellHalo::exchange_fields(std::initializer_list<std::vector<T>*> fields) const {
   if (!active_) return;
   const std::size_t nf = fields.size();
   requests_.clear();
@@ -182,5 +192,8 @@ void CellHalo::exchange(std::initializer_list<std::vector<double>*> fields) cons
       }
   }
 }
+
+template void CellHalo::exchange_fields(std::initializer_list<std::vector<double>*>) const;
+template void CellHalo::exchange_fields(std::initializer_list<std::vector<float>*>) const;
 
 }  // namespace tessera

@@ -42,8 +42,10 @@ class CellHalo {
   // Whether an exchange fills the ghost layers on `side` (0 low, 1 high) of direction d (a
   // neighbour rank or a periodic image lies there; not a wall or an outflow).
   bool fills(int d, int side) const { return fills_[d][side]; }
-  // Fills the ghosts of every field (collective over the communicator).
-  void exchange(std::initializer_list<std::vector<double>*> fields) const;
+  // Fills the ghosts of every field (collective over the communicator); single-precision fields
+  // travel as doubles (exactly).
+  void exchange(std::initializer_list<std::vector<double>*> fields) const { exchange_fields(fields); }
+  void exchange(std::initializer_list<std::vector<float>*> fields) const { exchange_fields(fields); }
 
   // What this rank has sent since the halo was made: messages to other ranks and their bytes (a
   // periodic copy onto itself is not a message).
@@ -72,8 +74,12 @@ class CellHalo {
   };
   template <class F>
   void for_rows(const Box& b, F&& fn) const;
-  void pack(const Box& b, const std::vector<double>& f, double* out) const;
-  void unpack(const Box& b, std::vector<double>& f, const double* in) const;
+  template <class T>
+  void pack(const Box& b, const std::vector<T>& f, double* out) const;
+  template <class T>
+  void unpack(const Box& b, std::vector<T>& f, const double* in) const;
+  template <class T>
+  void exchange_fields(std::initializer_list<std::vector<T>*> fields) const;
 
   MPI_Comm comm_ = MPI_COMM_NULL;
   int me_ = 0;

@@ -12,6 +12,7 @@ namespace {
 constexpr auto check = petsc_check;
 
 constexpr long kCoarsestCells = 256;  // stop coarsening below this many cells in all
+constexpr long kTwoLayersFace = 2048;  // two ghost layers on a level whose faces are at most this
 
 template <class F>
 void for_owned(const std::array<int, 3>& s, const std::array<int, 3>& m, F&& fn) {
@@ -105,12 +106,24 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
     if (active) {
       // Two ghost layers where every block along each direction with a neighbour (a rank, or a
       // periodic image) is at least 2 cells across: the layers sent are owned cells.
+      // Only where an exchange is latency-bound: every rank's face across a split direction at
+      // most kTwoLayersFace cells (a layer of 2,048 cells is 16 kB, about what this host's
+      // point-to-point bandwidth moves in one latency, 1.9 us x 9.8 GB/s; docs/performance.md): on
+      // large faces the second layer's bytes and the ghost layer's updates cost more than the
+      // latency saved (the V-cycle 3-5 % slower on 2 ranks of the paper drop's grid).
       L->layers = 1;
-      if (ghost_layers_ >= 2) {
+      bool neighbours = false;  // else nothing is exchanged: one layer (the smaller arrays)
+      for (int d = 0; d < 3; ++d) neighbours = neighbours || procs[d] > 1 || grid.periodic(d);
+      if (ghost_layers_ >= 2 && neighbours) {
         L->layers = 2;
         for (int d = 0; d < 3; ++d)
-          if (procs[d] > 1 || grid.periodic(d))
+          if (procs[d] > 1 || grid.periodic(d)) {
             for (PetscInt c : own[d]) L->layers = c < 2 ? 1 : L->layers;
+            const auto& a = own[(d + 1) % 3];
+            const auto& b = own[(d + 2) % 3];
+            const long face = long(*std::max_element(a.begin(), a.end())) * long(*std::max_element(b.begin(), b.end()));
+            if (face > kTwoLayersFace) L->layers = 1;
+          }
       }
       const int w = L->layers;
       for (int d = 0; d < 3; ++d) {
@@ -237,6 +250,7 @@ CellMultigrid::~CellMultigrid() {
 void CellMultigrid::exchange(Level& L, std::initializer_list<std::vector<double>*> fields) {
   if (!L.halo || !L.halo->active()) return;  // one rank, nothing periodic: no ghost has a source
   const double start = MPI_Wtime();
+  ++exchanges_;
   L.halo->exchange(fields);
   exchange_seconds_ += MPI_Wtime() - start;
 }
@@ -244,10 +258,7 @@ void CellMultigrid::exchange(Level& L, std::initializer_list<std::vector<double>
 void CellMultigrid::exchange_coefficients(Level& L) {
   if (!L.face_halo || !L.face_halo->active()) return;
   const double start = MPI_Wtime();
-  std::array<std::vector<double>, 3> c;  // single precision is exact in double and back
-  for (int d = 0; d < 3; ++d) c[d].assign(L.coef[d].begin(), L.coef[d].end());
-  L.face_halo->exchange({&c[0], &c[1], &c[2]});
-  for (int d = 0; d < 3; ++d) std::copy(c[d].begin(), c[d].end(), L.coef[d].begin());
+  L.face_halo->exchange({&L.coef[0], &L.coef[1], &L.coef[2]});
   exchange_seconds_ += MPI_Wtime() - start;
   // The first ghost layer's inverse diagonal, as its owner computes it.
   std::array<int, 3> s, m;
@@ -359,6 +370,10 @@ void CellMultigrid::set_coefficients(const std::vector<double>& rho, bool coarse
 long CellMultigrid::coarsest_cells() const {
   const auto& n = levels_.back()->n;
   return long(n[0]) * n[1] * n[2];
+}
+
+int CellMultigrid::two_layer_levels() const {
+  return int(std::count_if(levels_.begin(), levels_.end(), [](const auto& L) { return L->active && L->layers == 2; }));
 }
 
 int CellMultigrid::gathered_levels() const {
@@ -758,6 +773,7 @@ void CellMultigrid::apply(Vec xin, Vec yout) {
   check(VecGetArrayRead(xin, &in), "VecGetArrayRead");
   for_rows(F, [&](std::size_t row, std::size_t n) { std::copy(in + n, in + n + nx, F.b.data() + row); });
   check(VecRestoreArrayRead(xin, &in), "VecRestoreArrayRead");
+  ++cycles_;
   cycle(0);
   PetscScalar* out;
   check(VecGetArray(yout, &out), "VecGetArray");

@@ -24,8 +24,9 @@
 // count (the aggregates, and so the preconditioner, follow the ranks' blocks).
 //
 // Each level's blocks are each rank's aggregates; their ghosts are filled by fluid/cell_halo.hpp,
-// two layers deep where every split block is at least 2 cells across, so that a red-black sweep
-// needs one exchange instead of two (theory F9a), else one. Where a direction's blocks would fall below
+// two layers deep where every split block is at least 2 cells across and every face at most 2,048
+// cells (latency-bound exchanges), so that a red-black sweep needs one exchange instead of two
+// (theory F9a), else one. Where a direction's blocks would fall below
 // 2 cells on several ranks, the coarser level is gathered: pairs of ranks along that direction
 // hand their aggregates to the first of the pair, which owns both parts from there down (the
 // others wait for its correction), so every direction coarsens on as on one rank (theory F9a).
@@ -48,9 +49,10 @@ namespace tessera {
 class CellMultigrid {
  public:
   // coarse_direct: the coarsest level solved exactly (LU, every rank a copy); else coarse_sweeps.
-  // ghost_layers: 2 lets a smoothing sweep's two passes follow one exchange where every split
-  // block is at least 2 cells across (else a level keeps 1 layer and an exchange per pass); 1
-  // everywhere exchanges before every pass. The same numbers either way.
+  // ghost_layers: 2 lets a smoothing sweep's two passes follow one exchange on the levels whose
+  // split blocks are at least 2 cells across and whose faces are small (the others keep 1 layer
+  // and an exchange per pass); 1 everywhere exchanges before every pass. The same numbers either
+  // way.
   CellMultigrid(const FluidGrid& grid, int pre_sweeps = 2, int post_sweeps = 2, int coarse_sweeps = 20,
                 bool coarse_direct = true, int ghost_layers = 2);
   ~CellMultigrid();
@@ -68,6 +70,10 @@ class CellMultigrid {
   int levels() const { return int(levels_.size()); }
   long coarsest_cells() const;
   int gathered_levels() const;  // levels gathered onto fewer ranks than the next finer one
+  int two_layer_levels() const;  // levels whose ghosts are two layers deep (one exchange a sweep)
+  // Ghost exchanges per V-cycle on this rank, the operator's own (one a Krylov iteration) counted
+  // in: what the scaling model prices per cycle (0 before the first cycle).
+  double exchanges_per_cycle() const { return cycles_ ? double(exchanges_) / double(cycles_) : 0.0; }
   double exchange_seconds() const { return exchange_seconds_; }  // ghost exchanges, all levels
   CellHalo::Traffic halo_traffic() const;                          // what they sent, all levels
 
@@ -161,6 +167,7 @@ class CellMultigrid {
   KSP coarse_ksp_ = nullptr;
   Vec coarse_b_ = nullptr, coarse_x_ = nullptr;
   double exchange_seconds_ = 0;
+  long exchanges_ = 0, cycles_ = 0;
   MPI_Comm transfer_comm_ = MPI_COMM_NULL;     // the gathered levels' transfers
   std::vector<MPI_Comm> level_comms_;          // the gathered levels' communicators
   CellHalo::Traffic transfer_traffic_;

@@ -194,6 +194,8 @@ class FlowSolver {
   long poisson_coarsest_cells() const { return poisson_->coarsest_cells(); }
   int poisson_levels() const { return poisson_->levels(); }
   int poisson_gathered_levels() const { return poisson_->gathered_levels(); }
+  int poisson_two_layer_levels() const { return poisson_->two_layer_levels(); }
+  double poisson_exchanges_per_cycle() const { return poisson_->exchanges_per_cycle(); }
   // What this rank's ghost exchanges sent since the start (messages, bytes): the fields' and the
   // multigrid's (PETSc's own traffic in the Krylov solver is not counted).
   CellHalo::Traffic field_traffic() const { return grid_->halo_traffic(); }

@@ -61,6 +61,8 @@ class PressurePoisson {
   long coarsest_cells() const;       // the multigrid's coarsest level (0 without it)
   int levels() const { return multigrid_ ? multigrid_->levels() : 0; }
   int gathered_levels() const { return multigrid_ ? multigrid_->gathered_levels() : 0; }
+  int two_layer_levels() const { return multigrid_ ? multigrid_->two_layer_levels() : 0; }
+  double exchanges_per_cycle() const { return multigrid_ ? multigrid_->exchanges_per_cycle() : 0.0; }
   double exchange_seconds() const { return multigrid_ ? multigrid_->exchange_seconds() : 0.0; }
   CellHalo::Traffic halo_traffic() const { return multigrid_ ? multigrid_->halo_traffic() : CellHalo::Traffic{}; }
 
