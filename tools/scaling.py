@@ -16,6 +16,7 @@ each run's summary.json into speed-up, parallel efficiency and the time per phas
         D/iterations.json; the coupled model scales the Poisson's time and messages by them;
         --cuts-from: on the balanced cuts and grid of a `tessera balance` JSON (the model's)
   tools/scaling.py model CASE.yaml --ranks 2,4,16,64 --out D [--bodies CHECKPOINT] [--cuts balanced] [--png F] [--set ...]
+        [--balance D0/balance.json]
         predicts the loop time on P ranks from D's 1-rank runs, the work per rank that `tessera balance`
         counts for P on one process, and D/network.json; where D holds measured runs on P ranks it
         prints the model's error. The blast (its levelled step), a DEM scene of spheres or discs
@@ -288,8 +289,8 @@ def network(a):
             comm.Sendrecv(out, dest=other, recvbuf=back, source=other)
         dt = (MPI.Wtime() - t) / reps
         swaps.append((8.0 * size, comm.allreduce(dt, op=MPI.MAX)))
-    # The cell halo's exchange (fluid/cell_halo.hpp): one message to each neighbour rank, all in
-    # flight together; here k small messages (8 doubles) each way at once to the other rank, so that
+    # Messages in flight together (a cell halo's round, fluid/cell_halo.hpp: one message to each
+    # neighbour rank): here k small messages (8 doubles) each way at once to the other rank, so that
     # t(k) = t(1) + (k - 1) overhead gives each further message's cost.
     flights = []
     for k in (1, 2, 4, 8, 16, 26):
@@ -344,13 +345,20 @@ def model(a):
         # A coupled case's bodies weigh by the DEM sub-steps of a flow step: the 1-rank run's.
         a.set.append(f"coupling.substeps={max(1, round(runs[1][0]['coupling']['substeps_per_flow_step']))}")
     bal = os.path.join(a.out, "balance.json")
-    cmd = [TESSERA, "balance", os.path.abspath(a.case), "--ranks", ",".join(map(str, ranks)), "--json", bal]
-    if a.bodies:
-        cmd += ["--bodies", os.path.abspath(a.bodies)]
-    for x in a.set:
-        cmd += ["--set", x]
-    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
-    b = json.load(open(bal))
+    if a.balance:  # an earlier `tessera balance` of the same case, bodies and rank counts
+        b = json.load(open(a.balance))
+        missing = [p for p in ranks if p not in [row["ranks"] for row in b["table"]]]
+        if missing:
+            sys.exit(f"scaling model: {a.balance} has no rows for {missing} ranks")
+        b["table"] = [row for row in b["table"] if row["ranks"] in ranks]
+    else:
+        cmd = [TESSERA, "balance", os.path.abspath(a.case), "--ranks", ",".join(map(str, ranks)), "--json", bal]
+        if a.bodies:
+            cmd += ["--bodies", os.path.abspath(a.bodies)]
+        for x in a.set:
+            cmd += ["--set", x]
+        subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+        b = json.load(open(bal))
     if "partition" in b:
         rows = blast_model(a, b, runs, net)
     elif b.get("cells"):
@@ -513,9 +521,9 @@ def coupled_model(a, b, runs, net):
     the fluid force with the cells they report (an older `tessera balance`: both per laid-out body);
     each costed by the 1-rank run's timers. Then the
     exchanges: the field and multigrid halos (their exchanges per flow step, and bytes per face cell,
-    from the 2-rank run's per-rank traffic; at P each exchange is one round of messages to every
-    neighbour rank, faces, edges and corners: one latency, network.json's overhead for each further
-    message, and the busiest rank's face and edge bytes over the bandwidth), the Poisson's 3 reductions per Krylov
+    from the 2-rank run's per-rank traffic; at P each exchange pays per split direction one latency,
+    network.json's overhead for the second message, and the busiest rank's two faces' bytes over
+    the bandwidth), the Poisson's 3 reductions per Krylov
     iteration, and per DEM sub-step dem_model's swaps and list check, plus 6 swaps of the bodies' sums
     per flow step (C3's loads, C4a's sums and velocities, C7's moves, the ghosts' refresh). Where
     D/iterations.json counts the Poisson's iterations on P ranks, the Poisson's time, its reductions
@@ -624,25 +632,21 @@ def coupled_model(a, b, runs, net):
             # The busiest rank's face along each split direction (cells of the other two directions).
             face = {d: max(slabs[(d + 1) % 3][i] * slabs[(d + 2) % 3][j] for i in range(dims[(d + 1) % 3])
                            for j in range(dims[(d + 2) % 3])) for d in range(3) if dims[d] > 1}
-            # An exchange is one round (fluid/cell_halo.hpp): a message to each neighbour rank,
-            # across faces, edges and corners (both halos are two layers deep, box: the multigrid's
-            # where its blocks allow), all in flight together: one latency, each further message's
-            # overhead, and the bytes the busiest rank sends (2 faces a split direction, and the
-            # edges, 2 x 2 cells across, along the third direction's longest block).
+            # An exchange (fluid/cell_halo.hpp) goes direction by direction (the box halos: the
+            # fields', the multigrid's two-layer levels; its one-layer levels send all faces in one
+            # round, priced the same here, an upper bound): per split direction one latency, the
+            # overhead of its second message (network.json, messages in flight), and the bytes of
+            # the busiest rank's two faces.
             sides = {d: min(2, dims[d] - 1) for d in face}
-            neighbours = math.prod(1 + n for n in sides.values()) - 1
-            units = sum(sides[d] * f for d, f in face.items())
-            for d1 in face:
-                for d2 in face:
-                    if d1 < d2:
-                        units += sides[d1] * sides[d2] * 2 * max(slabs[3 - d1 - d2])
+            per_exchange = {k: sum(lat + (sides[d] - 1) * overhead + per_face[k] * sides[d] * f / bw
+                                   for d, f in face.items()) for k in ("field", "multigrid")}
             # The multigrid's exchanges scale with the iterations and with its exchanges a cycle
             # (two ghost layers on a level halve them; which levels have two depends on P).
             per_cycle = 1.0
             if count and count.get("exchanges_per_cycle") and two["poisson"].get("exchanges_per_cycle"):
                 per_cycle = count["exchanges_per_cycle"] / two["poisson"]["exchanges_per_cycle"]
-            halo = sum(msgs[k] * (ratio * per_cycle if k == "multigrid" else 1.0) *
-                       (lat + (neighbours - 1) * overhead + per_face[k] * units / bw) for k in ("field", "multigrid"))
+            halo = sum(msgs[k] * (ratio * per_cycle if k == "multigrid" else 1.0) * per_exchange[k]
+                       for k in ("field", "multigrid"))
             reductions = 3 * iters * ratio * math.ceil(math.log2(p)) * red
             if count and count.get("coarsest_cells") and "latency_s" in net:
                 # The coarsest level's LU on every rank: one all-gather of its right-hand side a cycle.
@@ -696,6 +700,8 @@ def main():
     p.add_argument("case")
     p.add_argument("--bodies", help="DEM scenes: the checkpoint whose bodies the ranks share")
     p.add_argument("--png", help="draw the predicted speed-up and time (with the measured points) here")
+    p.add_argument("--balance", help="reuse this `tessera balance` JSON (an earlier model's D/balance.json, the same "
+                   "case, bodies, --set and rank counts) instead of counting again (for a coupled case, minutes)")
     p.add_argument("--cuts", choices=["equal", "balanced"], default="equal",
                    help="DEM scenes: the cut planes the runs used (domain.cuts from `tessera balance`: balanced)")
     p.add_argument("--ranks", type=lambda s: [int(x) for x in s.split(",")], required=True)

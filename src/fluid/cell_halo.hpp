@@ -2,16 +2,17 @@
 // The ghost exchange of arrays laid out over a rank's ghosted box of a Cartesian process grid
 // (the flow fields, FluidGrid; the multigrid's levels, CellMultigrid; docs/theory.md F11a).
 //
-// In one round: each rank sends every neighbour rank (across a face, and, with the box stencil,
-// across an edge or a corner too) the owned cells its ghosts image, all in one message per
-// neighbour rank, all messages in flight together, and writes what it receives into its ghost
-// layers `width` deep; where the neighbour along a periodic direction is the rank itself, it copies
-// its own far layers. With the star stencil only the face ghosts are filled. A ghost beyond a wall
-// or an outflow is never written, as in a PETSc DMDA's DMLocalToLocal with DM_BOUNDARY_GHOSTED,
-// which this replaces: that one's scatter also copied every owned value onto itself through an
-// index list, which cost the flow a tenth of its time on 2 ranks (docs/performance.md, 2026-12-03).
-// Several fields go in the same messages. (Until 2026-12-05 the exchange went direction by
-// direction, the edges and corners in two or three hops: one latency per split direction.)
+// Each rank sends every neighbour rank whose ghosts image its owned cells those cells, `width`
+// layers deep, all boxes for one rank in one message, and writes what it receives into its ghost
+// layers; where the neighbour along a periodic direction is the rank itself, it copies its own far
+// layers. With the star stencil (face ghosts only) the six faces go in one round, all messages in
+// flight together. With the box stencil, direction by direction (x, then y, then z): the layers
+// sent along a later direction include the ghosts the earlier directions filled (where a neighbour
+// rank or periodic image exists along them), so edges and corners arrive in two or three hops.
+// A ghost beyond a wall or an outflow is never written, as in a PETSc DMDA's DMLocalToLocal with
+// DM_BOUNDARY_GHOSTED, which this replaces: that one's scatter also copied every owned value onto
+// itself through an index list, which cost the flow a tenth of its time on 2 ranks
+// (docs/performance.md, 2026-12-03). Several fields go in the same messages.
 #pragma once
 #include <mpi.h>
 
@@ -86,7 +87,9 @@ class CellHalo {
   bool active_ = false;
   std::array<std::ptrdiff_t, 3> stride_{};
   std::array<std::array<bool, 2>, 3> fills_{};
-  std::vector<Peer> peers_;  // other ranks first, then this rank's own images
+  // The exchange's rounds, one after the other (star: one; box: one per direction), each a list of
+  // peers whose messages are in flight together: other ranks first, then this rank's own images.
+  std::vector<std::vector<Peer>> rounds_;
   mutable std::vector<std::vector<double>> send_buf_, recv_buf_;
   mutable std::vector<MPI_Request> requests_;
   mutable Traffic traffic_;
