@@ -255,16 +255,18 @@ void CellMultigrid::exchange(Level& L, std::initializer_list<std::vector<double>
   exchange_seconds_ += MPI_Wtime() - start;
 }
 
-void CellMultigrid::exchange_coefficients(Level& L) {
-  if (!L.face_halo || !L.face_halo->active()) return;
-  const double start = MPI_Wtime();
-  L.face_halo->exchange({&L.coef[0], &L.coef[1], &L.coef[2]});
-  exchange_seconds_ += MPI_Wtime() - start;
-  // The first ghost layer's inverse diagonal, as its owner computes it.
-  std::array<int, 3> s, m;
-  for (int d = 0; d < 3; ++d) {
-    s[d] = L.s[d] - (L.halo->fills(d, 0) ? 1 : 0);
-    m[d] = L.m[d] + (L.s[d] - s[d]) + (L.halo->fills(d, 1) ? 1 : 0);
+void CellMultigrid::set_inverse_diagonal(Level& L) {
+  // With two layers the ghost cells' face coefficients come from their owners first, and the first
+  // ghost layer's inverse diagonal is computed as its owner computes it.
+  std::array<int, 3> s = L.s, m = L.m;
+  if (L.face_halo && L.face_halo->active()) {
+    const double start = MPI_Wtime();
+    L.face_halo->exchange({&L.coef[0], &L.coef[1], &L.coef[2]});
+    exchange_seconds_ += MPI_Wtime() - start;
+    for (int d = 0; d < 3; ++d) {
+      s[d] = L.s[d] - (L.halo->fills(d, 0) ? 1 : 0);
+      m[d] = L.m[d] + (L.s[d] - s[d]) + (L.halo->fills(d, 1) ? 1 : 0);
+    }
   }
   for_owned(s, m, [&](int i, int j, int k) {
     const std::size_t c = L.at(i, j, k);
@@ -357,12 +359,7 @@ void CellMultigrid::set_coefficients(const std::vector<double>& rho, bool coarse
   for (std::size_t l = 0; l < (coarse ? levels_.size() : 1); ++l) {
     Level& L = *levels_[l];
     if (!L.active) break;
-    for_owned(L.s, L.m, [&](int i, int j, int k) {
-      const std::size_t c = L.at(i, j, k);
-      const double s = coefficient_sum(L, c);
-      L.inv_diag[c] = float(s > 0 ? 1 / s : 1.0);
-    });
-    exchange_coefficients(L);
+    set_inverse_diagonal(L);
   }
   if (coarse && coarse_direct_ && levels_.back()->active) assemble_coarsest();
 }

@@ -126,9 +126,9 @@ class CellMultigrid {
     }
   };
   void exchange(Level& L, std::initializer_list<std::vector<double>*> fields);
-  // With 2 layers: the face coefficients of the ghost cells from their owners, and the inverse
-  // diagonal of the first ghost layer's cells computed from them (the same bits as their owner's).
-  void exchange_coefficients(Level& L);
+  // The smoother's inverse diagonal of the owned cells; with 2 layers first the ghost cells' face
+  // coefficients from their owners, and the first ghost layer's too (the same bits as its owner's).
+  void set_inverse_diagonal(Level& L);
   // Red-black sweeps, all passes in one stream down the level, each a plane behind the one before,
   // the cells beside exchanged ghosts after an exchange per pass, or with 2 ghost layers per two
   // passes (theory F9a). `from_zero`: x starts at 0 (its first pass reads no neighbour); else the
