@@ -147,7 +147,7 @@ class CellMultigrid {
   template <class Pack>
   void scatter(Level& C, std::vector<double>& mine, Pack&& pack);
   void cycle(std::size_t l);
-  // The coarsest level's exact solve (theory F9a): its operator (the V-cycle's single-precision
+  // The coarsest level's exact solve (theory F9a; cell_multigrid_coarsest.cpp): its operator (the V-cycle's single-precision
   // coefficients, in double) gathered to every rank in the level's natural order and factored by
   // LU there, the right-hand side gathered the same way: the same arithmetic on any rank count.
   void assemble_coarsest();
