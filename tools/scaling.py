@@ -576,6 +576,10 @@ def coupled_model(a, b, runs, net):
     # The list bins the owned elements and the ghosts' within reach of the sub-box (theory T5b), when
     # `tessera balance` counted them; else it is priced per owned plus ghost body.
     E = sum(row1["load_" + cuts].get("owned_elements", [0.0]))
+    # Better: the elements each rank's whole listing meets (`list_tests`, theory T5c: a ghost meets
+    # the owned ones only), made by `tessera balance` for each rank; the list priced by them against
+    # 1 rank's (its relists taken to scale as its whole listing does).
+    T = sum(row1["load_" + cuts].get("list_tests", [0.0]))
     # The lay-outs each rank makes, done and timed by `tessera balance` on one core
     # (coupling/layout_cost.hpp): the solid fraction priced by their time, the fluid force by the
     # cells they report, each against 1 rank's.
@@ -611,7 +615,9 @@ def coupled_model(a, b, runs, net):
         cells = [c / cw for c in row["cell_work_" + cuts]]
         local = [load["bodies"][r] + load["ghosts"][r] for r in range(p)]
         laid = load.get("laid_out", local)
-        if E > 0 and "listed_ghost_elements" in load:
+        if T > 0 and "list_tests" in load:  # the elements each rank's whole listing meets (T5c)
+            listed = [load["list_tests"][r] / T * B for r in range(p)]
+        elif E > 0 and "listed_ghost_elements" in load:
             listed = [(load["owned_elements"][r] + load["listed_ghost_elements"][r]) / E * B for r in range(p)]
         else:
             listed = local

@@ -167,10 +167,14 @@ int balance_report(const BalanceRequest& rq) {
       elements.first.push_back(elements.x.size());
       if (k == 0) {
         elements.x.push_back(x.back());
+        elements.radius.push_back(rows[i + 3]);
         element_radius = std::max(element_radius, rows[i + 3]);
       } else if (cols >= 19) {
         const Quaternion q{rows[i + 15], rows[i + 16], rows[i + 17], rows[i + 18]};
-        for (const Vec3& c : shapes[k - 1].spheres) elements.x.push_back(x.back() + q.rotate(c));
+        for (const Vec3& c : shapes[k - 1].spheres) {
+          elements.x.push_back(x.back() + q.rotate(c));
+          elements.radius.push_back(shapes[k - 1].sphere_radius);
+        }
         poses.push_back({x.back(), q, int(k)});
         element_radius = std::max(element_radius, shapes[k - 1].sphere_radius);
       }
@@ -220,6 +224,7 @@ int balance_report(const BalanceRequest& rq) {
                      {"total_pairs", l.total_pairs}, {"pair_imbalance", imbalance(l.pairs)}};
     if (!l.laid_out.empty()) j["laid_out"] = l.laid_out;
     if (!l.owned_elements.empty()) j["owned_elements"] = l.owned_elements, j["listed_ghost_elements"] = l.listed_ghost_elements;
+    if (!l.list_tests.empty()) j["list_tests"] = l.list_tests;
     return j;
   };
 
@@ -249,21 +254,25 @@ int balance_report(const BalanceRequest& rq) {
         throw InputError("--ranks", std::to_string(p),
                          "rank counts whose slabs are wider than the contact reach along axis " + std::to_string(d));
     std::vector<double> equal_work = rank_work(work, dims, equal_cuts(lo, hi, dims));
-    // A coupled run's cut search (FlowScene::balance_if_due): histograms of the bodies and the
-    // cells as a box; the others' exact quantiles of the bodies.
-    const CutPlanes cuts =
-        coupled ? balanced_cuts(MPI_COMM_SELF, work, lo, hi, dims, min_width, spacing, 4096,
-                                {WorkBox{lo, hi, total_cells * cell_weight}})
-                : balanced_cuts(work, lo, hi, dims, min_width, spacing);
+    // A coupled run's cut search (FlowScene::balance_if_due): its two stages, the cells (a box) and
+    // the bodies, by histograms (staged_cuts); the others' exact quantiles of the bodies.
+    const StagedCuts staged =
+        coupled ? staged_cuts(MPI_COMM_SELF, {{{}, {WorkBox{lo, hi, total_cells * cell_weight}}}, {work, {}}}, lo, hi, dims,
+                              min_width, spacing)
+                : StagedCuts{balanced_cuts(work, lo, hi, dims, min_width, spacing), 0, "summed"};
+    const CutPlanes& cuts = staged.cuts;
     std::vector<double> balanced_work = rank_work(work, dims, cuts);
     std::vector<double> equal_cells, balanced_cells;
-    if (coupled) {
+    double equal = 0, balanced = 0;
+    if (coupled) {  // the staged imbalance: the stages' busiest ranks over their means
       equal_cells = cell_work(dims, equal_cuts(lo, hi, dims));
       balanced_cells = cell_work(dims, cuts);
+      equal = staged_imbalance({equal_cells, equal_work}), balanced = staged_imbalance({balanced_cells, balanced_work});
       equal_work = plus(equal_work, equal_cells);
       balanced_work = plus(balanced_work, balanced_cells);
+    } else {
+      equal = imbalance(equal_work), balanced = imbalance(balanced_work);
     }
-    const double equal = imbalance(equal_work), balanced = imbalance(balanced_work);
     const RankLoad equal_load = dem_rank_load(x, radius, lo, hi, dims, equal_cuts(lo, hi, dims), skin, node_reach, places);
     const RankLoad balanced_load = dem_rank_load(x, radius, lo, hi, dims, cuts, skin, node_reach, places);
     // A coupled case's lay-outs, each rank's done and timed here (the body stages' price).
@@ -284,6 +293,7 @@ int balance_report(const BalanceRequest& rq) {
                      {"grid", dims},
                      {"imbalance_equal", equal},
                      {"imbalance_balanced", balanced},
+                     {"cut_candidate", staged.candidate},  // coupled: which of staged_cuts' candidates
                      {"cuts", {cuts[0], cuts[1], cuts[2]}},
                      {"work_per_rank_equal", equal_work},  // rank order: x fastest; work = 1 + listed pairs per body
                                                             // (coupled: times the sub-steps, plus the cells')

@@ -213,21 +213,24 @@ void DemScene::summarise(nlohmann::json& s) {
     for (const auto& w : dem_->work()) local += w.weight;
     s["imbalance"] = imbalance(comm, local);  // the final cut planes: "cuts" (run_loop.cpp)
     // Per rank, in rank order (the timers' per_rank beside them): bodies, work, halo bytes sent,
-    // the list's relists (T5a: all ranks relist together, so these are equal), and at the last
-    // binning the elements in the list's cells and the ghosts' left out (T5b).
+    // the list's relists (T5a: all ranks relist together, so these are equal), at the last
+    // binning the elements in the list's cells and the ghosts' left out (T5b), and the elements
+    // the list's searches met over the run (its work, T5c).
     const int size = decomp_->size();
-    constexpr int kPer = 6;
+    constexpr int kPer = 7;
     const double mine[kPer] = {static_cast<double>(dem_->particles().owned), local,
                                static_cast<double>(dem_->halo_bytes_sent()), static_cast<double>(dem_->list_relists()),
                                static_cast<double>(dem_->listed_elements()),
-                               static_cast<double>(dem_->ghost_elements_left_out())};
+                               static_cast<double>(dem_->ghost_elements_left_out()),
+                               static_cast<double>(dem_->list_tests())};
     std::vector<double> all(kPer * static_cast<std::size_t>(size));
     MPI_Allgather(mine, kPer, MPI_DOUBLE, all.data(), kPer, MPI_DOUBLE, comm);
     nlohmann::json per_rank{{"bodies", nlohmann::json::array()}, {"work", nlohmann::json::array()},
                             {"halo_bytes_sent", nlohmann::json::array()},
                             {"neighbor_list_relists", nlohmann::json::array()},
                             {"listed_elements", nlohmann::json::array()},
-                            {"ghost_elements_left_out", nlohmann::json::array()}};
+                            {"ghost_elements_left_out", nlohmann::json::array()},
+                            {"neighbor_list_tests", nlohmann::json::array()}};
     for (int r = 0; r < size; ++r) {
       per_rank["bodies"].push_back(static_cast<long>(all[kPer * r]));
       per_rank["work"].push_back(all[kPer * r + 1]);
@@ -235,6 +238,7 @@ void DemScene::summarise(nlohmann::json& s) {
       per_rank["neighbor_list_relists"].push_back(static_cast<long>(all[kPer * r + 3]));
       per_rank["listed_elements"].push_back(static_cast<long>(all[kPer * r + 4]));
       per_rank["ghost_elements_left_out"].push_back(static_cast<long>(all[kPer * r + 5]));
+      per_rank["neighbor_list_tests"].push_back(static_cast<long>(all[kPer * r + 6]));
     }
     s["per_rank"] = per_rank;
     if (balance_.enabled) s["balance"] = balance_.summary();

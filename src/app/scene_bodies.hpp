@@ -64,6 +64,7 @@ class SceneBodies {
   std::size_t halo_bytes_sent() const { return dem_->halo_bytes_sent(); }  // the DEM's ghosts and migrations
   std::size_t listed_elements() const { return dem_->listed_elements(); }  // the DEM list's last binning (T5b)
   std::size_t ghost_elements_left_out() const { return dem_->ghost_elements_left_out(); }
+  std::size_t list_tests() const { return dem_->list_tests(); }  // the DEM list's work over the run (T5c)
   // The busy seconds of the bodies' stages so far (DEM sub-steps, solid fraction, fluid force, pore
   // liquid, correction), this rank.
   double busy_seconds();

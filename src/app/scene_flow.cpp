@@ -416,9 +416,10 @@ double FlowScene::rank_work(double cells_weight, const std::vector<WorkSample>& 
   return w;
 }
 
-// Every balance.interval steps: the ranks' work (their flow cells and bodies); above the threshold
-// the cut planes move to the weighted quantiles of its marginals along each direction, on cell
-// faces, each slab at least two cells (the halo) and the DEM's contact reach wide.
+// Every balance.interval steps: the ranks' work in the step's two stages (their flow cells, their
+// bodies), each stage waiting for its busiest rank; above the threshold (the staged imbalance) the
+// cut planes move to those of staged_cuts' candidates that make the stages' busiest ranks' sum
+// least, on cell faces, each slab at least two cells (the halo) and the DEM's contact reach wide.
 void FlowScene::balance_if_due(const RunOptions& opt) {
   if (!balance_.due(flow_->steps(), decomp_->size())) return;
   MPI_Comm comm = decomp_->comm();
@@ -436,7 +437,7 @@ void FlowScene::balance_if_due(const RunOptions& opt) {
       for (auto& s : bodies) s.weight *= counts > 0 ? since / counts : 0.0;
     }
   }
-  const double before = imbalance(comm, rank_work(cells.weight, bodies));
+  const double before = staged_imbalance(comm, {cells.weight, rank_work(0, bodies)});
   if (!balance_.over_threshold(before)) return;
   const FluidGrid& g = flow_->grid();
   const Vec3 lo = decomp_->global_lo(), hi = decomp_->global_hi();
@@ -447,13 +448,16 @@ void FlowScene::balance_if_due(const RunOptions& opt) {
     if (bodies_) min_width[d] = std::max(min_width[d], bodies_->contact_reach() + g.h(d));
     if (decomp_->dims()[d] * min_width[d] >= hi[d] - lo[d]) return;  // no room to move the cuts
   }
-  CutPlanes cuts = balanced_cuts(comm, bodies, lo, hi, decomp_->dims(), min_width, spacing, 4096, {cells});
+  // The flow's stage and the bodies' each wait for their busiest rank (staged_cuts).
+  const CutPlanes now = decomp_->interior_cuts();
+  CutPlanes cuts =
+      staged_cuts(comm, {{{}, {cells}}, {bodies, {}}}, lo, hi, decomp_->dims(), min_width, spacing, 4096, &now).cuts;
   for (auto& c : cuts) MPI_Bcast(c.data(), static_cast<int>(c.size()), MPI_DOUBLE, 0, comm);  // one rounding
   if (cuts == decomp_->interior_cuts()) return;  // already where the work puts them (to a cell)
   repartition(cuts, opt);
   std::optional<double> after;
   if (!balance_.measure_time)
-    after = imbalance(comm, rank_work(owned_cells().weight, body_work()));
+    after = staged_imbalance(comm, {owned_cells().weight, rank_work(0, body_work())});
   balance_.rebalanced(flow_->steps(), before, after);
 }
 
@@ -552,13 +556,13 @@ void FlowScene::summarise(nlohmann::json& s) {
   {
     const WorkBox box = owned_cells();
     const double owned = double(std::lround(box.weight / cell_weight_));  // the cell count
-    const double local = rank_work(box.weight, body_work());
-    s["imbalance"] = imbalance(decomp_->comm(), local);
+    const double body_weight = rank_work(0, body_work()), local = box.weight + body_weight;
+    s["imbalance"] = staged_imbalance(decomp_->comm(), {box.weight, body_weight});  // the two stages'
     const int size = decomp_->size();
     // And what each rank's ghost exchanges sent over the run: the flow's fields and multigrid
     // (messages, bytes), the bodies' (bytes).
     const CellHalo::Traffic fields = flow_->field_traffic(), multigrid = flow_->multigrid_traffic();
-    constexpr int n = 9;
+    constexpr int n = 10;
     const double mine[n] = {double(owned),
                             local,
                             double(fields.messages),
@@ -567,14 +571,16 @@ void FlowScene::summarise(nlohmann::json& s) {
                             multigrid.bytes,
                             bodies_ ? double(bodies_->halo_bytes_sent()) : 0.0,
                             bodies_ ? double(bodies_->listed_elements()) : 0.0,
-                            bodies_ ? double(bodies_->ghost_elements_left_out()) : 0.0};
+                            bodies_ ? double(bodies_->ghost_elements_left_out()) : 0.0,
+                            bodies_ ? double(bodies_->list_tests()) : 0.0};
     std::vector<double> all(n * std::size_t(size));
     MPI_Allgather(mine, n, MPI_DOUBLE, all.data(), n, MPI_DOUBLE, decomp_->comm());
     const char* names[n] = {"cells", "work", "field_halo_messages", "field_halo_bytes", "multigrid_halo_messages",
-                            "multigrid_halo_bytes", "body_halo_bytes", "listed_elements", "ghost_elements_left_out"};
+                            "multigrid_halo_bytes", "body_halo_bytes", "listed_elements", "ghost_elements_left_out",
+                            "neighbor_list_tests"};
     nlohmann::json per_rank;
     for (int k = 0; k < n; ++k) {
-      if (k >= 6 && !bodies_) break;  // the bodies' halo and list (T5b: the last binning's)
+      if (k >= 6 && !bodies_) break;  // the bodies' halo and list (T5b: the last binning's; T5c: its work)
       per_rank[names[k]] = nlohmann::json::array();
       for (int r = 0; r < size; ++r) {
         const double v = all[std::size_t(n * r + k)];

@@ -36,9 +36,16 @@ std::vector<double> balanced_cuts(const std::vector<double>& x, const std::vecto
       const double right = k < order.size() ? std::clamp(x[order[k]], lo, hi) : hi;
       at = 0.5 * (left + right);
     }
-    if (spacing > 0) at = lo + std::round((at - lo) / spacing) * spacing;
     cuts.push_back(at);
   }
+  fit_slabs(cuts, lo, hi, min_width, spacing);
+  return cuts;
+}
+
+void fit_slabs(std::vector<double>& cuts, double lo, double hi, double min_width, double spacing) {
+  const int parts = static_cast<int>(cuts.size()) + 1;
+  if (spacing > 0)
+    for (double& at : cuts) at = lo + std::round((at - lo) / spacing) * spacing;
   // Widths: every slab at least min_width (and one spacing), pushing cuts up, then down from hi.
   const double w = std::max(min_width, spacing);
   for (int c = 0; c < parts - 1; ++c) {
@@ -49,7 +56,6 @@ std::vector<double> balanced_cuts(const std::vector<double>& x, const std::vecto
     const double next = c == parts - 2 ? hi : cuts[c + 1];
     if (cuts[c] > next - w) cuts[c] = spacing > 0 ? next - std::ceil(w / spacing - 1e-9) * spacing : next - w;
   }
-  return cuts;
 }
 
 CutPlanes balanced_cuts(const std::vector<WorkSample>& work, const Vec3& lo, const Vec3& hi, std::array<int, 3> dims,
@@ -125,6 +131,98 @@ CutPlanes balanced_cuts(MPI_Comm comm, const std::vector<WorkSample>& local, con
     cuts[d] = balanced_cuts(x, hist, lo[d], hi[d], dims[d], min_width[d], spacing[d]);
   }
   return cuts;
+}
+
+std::vector<double> rank_work(MPI_Comm comm, const StageWork& stage, const Vec3& lo, const Vec3& hi,
+                              std::array<int, 3> dims, const CutPlanes& interior) {
+  std::vector<double> per_rank = rank_work(stage.samples, dims, interior);
+  for (const WorkBox& box : stage.boxes) {
+    // The share of the box in each slab of each direction (a box's weight is spread evenly).
+    std::array<std::vector<double>, 3> share;
+    bool empty = false;
+    for (int d = 0; d < 3; ++d) {
+      const auto n = static_cast<std::size_t>(dims[d]);
+      share[d].assign(n, 0.0);
+      const double a = std::clamp(box.lo[d], lo[d], hi[d]), z = std::clamp(box.hi[d], lo[d], hi[d]);
+      if (!(z > a)) {
+        empty = true;
+        break;
+      }
+      for (std::size_t i = 0; i < n; ++i) {
+        const double s_lo = i == 0 ? lo[d] : interior[d][i - 1], s_hi = i + 1 == n ? hi[d] : interior[d][i];
+        share[d][i] = std::max(0.0, std::min(z, s_hi) - std::max(a, s_lo)) / (z - a);
+      }
+    }
+    if (empty) continue;
+    std::size_t r = 0;
+    for (int k = 0; k < dims[2]; ++k)
+      for (int j = 0; j < dims[1]; ++j)
+        for (int i = 0; i < dims[0]; ++i, ++r)
+          per_rank[r] += box.weight * share[0][static_cast<std::size_t>(i)] * share[1][static_cast<std::size_t>(j)] *
+                         share[2][static_cast<std::size_t>(k)];
+  }
+  MPI_Allreduce(MPI_IN_PLACE, per_rank.data(), static_cast<int>(per_rank.size()), MPI_DOUBLE, MPI_SUM, comm);
+  return per_rank;
+}
+
+double staged_imbalance(const std::vector<std::vector<double>>& per_stage) {
+  double most = 0, mean = 0;
+  for (const auto& w : per_stage) {
+    if (w.empty()) continue;
+    double sum = 0, top = 0;
+    for (const double x : w) sum += x, top = std::max(top, x);
+    most += top, mean += sum / static_cast<double>(w.size());
+  }
+  return mean > 0 ? most / mean : 1;
+}
+
+double staged_imbalance(MPI_Comm comm, const std::vector<double>& local_stage_work) {
+  std::vector<double> most(local_stage_work), sum(local_stage_work);
+  MPI_Allreduce(MPI_IN_PLACE, most.data(), static_cast<int>(most.size()), MPI_DOUBLE, MPI_MAX, comm);
+  MPI_Allreduce(MPI_IN_PLACE, sum.data(), static_cast<int>(sum.size()), MPI_DOUBLE, MPI_SUM, comm);
+  int size = 1;
+  MPI_Comm_size(comm, &size);
+  double top = 0, mean = 0;
+  for (std::size_t s = 0; s < most.size(); ++s) top += most[s], mean += sum[s] / size;
+  return mean > 0 ? top / mean : 1;
+}
+
+StagedCuts staged_cuts(MPI_Comm comm, const std::vector<StageWork>& stages, const Vec3& lo, const Vec3& hi,
+                       std::array<int, 3> dims, const Vec3& min_width, const Vec3& spacing, int bins,
+                       const CutPlanes* current) {
+  // The candidates: the cuts now (kept on a tie), those that balance all the stages' work together,
+  // those that balance each stage alone and blends of the two (a quarter, a half, three quarters of
+  // the way), each put on the spacing with its slabs at least min_width, and equal slabs.
+  std::vector<std::pair<CutPlanes, std::string>> candidates;
+  if (current) candidates.emplace_back(*current, "current");
+  StageWork all;
+  for (const StageWork& s : stages) {
+    all.samples.insert(all.samples.end(), s.samples.begin(), s.samples.end());
+    all.boxes.insert(all.boxes.end(), s.boxes.begin(), s.boxes.end());
+  }
+  const CutPlanes summed = balanced_cuts(comm, all.samples, lo, hi, dims, min_width, spacing, bins, all.boxes);
+  candidates.emplace_back(summed, "summed");
+  for (std::size_t k = 0; k < stages.size(); ++k) {
+    const CutPlanes own = balanced_cuts(comm, stages[k].samples, lo, hi, dims, min_width, spacing, bins, stages[k].boxes);
+    for (const double t : {0.25, 0.5, 0.75, 1.0}) {
+      CutPlanes blend = summed;
+      for (int d = 0; d < 3; ++d) {
+        for (std::size_t c = 0; c < blend[d].size(); ++c) blend[d][c] = (1 - t) * blend[d][c] + t * own[d][c];
+        fit_slabs(blend[d], lo[d], hi[d], min_width[d], spacing[d]);
+      }
+      candidates.emplace_back(blend, "stage " + std::to_string(k) + (t < 1 ? " at " + std::to_string(t).substr(0, 4) : ""));
+    }
+  }
+  candidates.emplace_back(equal_cuts(lo, hi, dims), "equal");
+  StagedCuts best;
+  best.imbalance = HUGE_VAL;
+  for (const auto& [cuts, name] : candidates) {
+    std::vector<std::vector<double>> per_stage;
+    for (const StageWork& s : stages) per_stage.push_back(rank_work(comm, s, lo, hi, dims, cuts));
+    const double cost = staged_imbalance(per_stage);
+    if (cost < best.imbalance) best = {cuts, cost, name};  // the first of equals
+  }
+  return best;
 }
 
 double imbalance(MPI_Comm comm, double local_work) {

@@ -14,6 +14,7 @@
 #include <mpi.h>
 
 #include <array>
+#include <string>
 #include <vector>
 
 #include "core/vec3.hpp"
@@ -58,5 +59,38 @@ CutPlanes balanced_cuts(MPI_Comm comm, const std::vector<WorkSample>& local, con
                         int bins = 4096, const std::vector<WorkBox>& boxes = {});
 // Collective: the largest rank's work over the mean.
 double imbalance(MPI_Comm comm, double local_work);
+
+// Cuts on the spacing (multiples of it from lo, when > 0) with every slab at least min_width,
+// moving as few cuts as it takes (balanced_cuts' last step).
+void fit_slabs(std::vector<double>& interior, double lo, double hi, double min_width, double spacing);
+
+// Work done in stages that each end in a wait for all ranks (a coupled step: the flow over its
+// cells, then the bodies' sub-steps and lay-outs): a step takes, per stage, its busiest rank's
+// time. Its imbalance is the sum over the stages of the busiest rank's work over the sum of their
+// means (1: every stage balanced).
+struct StageWork {
+  std::vector<WorkSample> samples;
+  std::vector<WorkBox> boxes;
+};
+double staged_imbalance(const std::vector<std::vector<double>>& per_stage_per_rank);
+// Collective: from each rank's work in each stage.
+double staged_imbalance(MPI_Comm comm, const std::vector<double>& local_stage_work);
+// Collective: each rank's work of one stage (rank order: x fastest) for the interior cuts; a box
+// adds its weight to the ranks in proportion to the volume it shares with them.
+std::vector<double> rank_work(MPI_Comm comm, const StageWork& stage, const Vec3& lo, const Vec3& hi,
+                              std::array<int, 3> dims, const CutPlanes& interior);
+// Collective: cut planes for staged work. Equal shares of the stages' summed work do not make a
+// staged step fastest when the stages' work lies differently (the flow's cells fill the box evenly,
+// the bodies' work thins out at the walls and comes in whole grains): among the cuts now (when
+// given; kept on a tie), those that balance the summed work, those that balance each stage alone
+// and blends of the two, and equal slabs, the cuts whose staged imbalance is least.
+struct StagedCuts {
+  CutPlanes cuts;
+  double imbalance = 1;   // staged_imbalance at these cuts
+  std::string candidate;  // "current", "summed", "stage K at T" (a blend), "stage K", "equal"
+};
+StagedCuts staged_cuts(MPI_Comm comm, const std::vector<StageWork>& stages, const Vec3& lo, const Vec3& hi,
+                       std::array<int, 3> dims, const Vec3& min_width = {}, const Vec3& spacing = {}, int bins = 4096,
+                       const CutPlanes* current = nullptr);
 
 }  // namespace tessera

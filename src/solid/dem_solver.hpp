@@ -191,6 +191,8 @@ class DemSolver {
   // The last binning's elements: those in the list's cells, and the ghosts' left out of them (T5b).
   std::size_t listed_elements() const { return pairs_.list().binned; }
   std::size_t ghost_elements_left_out() const { return pairs_.list().left_out; }
+  // The elements the list's searches met over the run (its work counter, NeighborList::tests).
+  std::size_t list_tests() const { return pairs_.list().tests; }
   std::size_t pair_count() const { return pairs_.list().size(); }
   // Collective: completes the load on each mesh wall (MeshWall::force, moment) for reporting;
   // pivot meshes have it every step already.

@@ -93,6 +93,7 @@ void NeighborList::bin(const ContactElements& p, double skin) {
   inv_h_ = 1.0 / h;
   const std::size_t ncell = static_cast<std::size_t>(nc_[0]) * nc_[1] * nc_[2];
   cell_start_.assign(ncell + 1, 0);
+  cell_owned_end_.assign(ncell, 0);
   cell_items_.resize(n);
   large_.clear();
   for (std::size_t i = 0; i < n; ++i) {
@@ -106,8 +107,13 @@ void NeighborList::bin(const ContactElements& p, double skin) {
                   cell_coord(p.x[p.stride * i], 0);
     cell_of_[i] = c;
     ++cell_start_[c + 1];
+    cell_owned_end_[c] += i < p.owned;
   }
   for (std::size_t c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
+  // A cell's items in element order: its owned elements first (indices below p.owned), ending at
+  // cell_owned_end_, then its ghosts.
+  for (std::size_t c = 0; c < ncell; ++c) cell_owned_end_[c] += cell_start_[c];
+  binned_owned_ = p.owned;
   std::vector<std::int32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
   for (std::size_t i = 0; i < n; ++i)
     if (cell_of_[i] >= 0) cell_items_[fill[cell_of_[i]]++] = static_cast<std::int32_t>(i);
@@ -172,6 +178,7 @@ void NeighborList::list_all(const ContactElements& p, double skin, const History
     const std::int32_t a = cell_items_[u], body_u = packed_body_[u];
     const auto& xa = packed_[u];
     while (v < end) {
+      ++tests;
       if (packed_body_[v] == body_u) {
         v = run_end_[v];
         continue;
@@ -197,14 +204,17 @@ void NeighborList::list_all(const ContactElements& p, double skin, const History
     for (int cy = 0; cy < nc[1]; ++cy)
       for (int cx = 0; cx < nc[0]; ++cx) {
         const int c = (cz * nc[1] + cy) * nc[0] + cx;
-        const int begin = cell_start_[c], end = cell_start_[c + 1];
+        const int begin = cell_start_[c], end = cell_start_[c + 1], owned_end = cell_owned_end_[c];
         if (begin == end) continue;
-        for (int u = begin; u < end; ++u) consider_binned(u, run_end_[u], end);
+        // A ghost's partners are owned (theory T5c): it scans the owned prefix of each cell only,
+        // and none of its own cell's later items (ghosts too).
+        for (int u = begin; u < owned_end; ++u) consider_binned(u, run_end_[u], end);
         for (const auto& o : kHalf) {
           const int x = cx + o[0], y = cy + o[1], z = cz + o[2];
           if (x < 0 || y < 0 || z < 0 || x >= nc[0] || y >= nc[1] || z >= nc[2]) continue;
           const int cc = (z * nc[1] + y) * nc[0] + x;
-          for (int u = begin; u < end; ++u) consider_binned(u, cell_start_[cc], cell_start_[cc + 1]);
+          for (int u = begin; u < owned_end; ++u) consider_binned(u, cell_start_[cc], cell_start_[cc + 1]);
+          for (int u = owned_end; u < end; ++u) consider_binned(u, cell_start_[cc], cell_owned_end_[cc]);
         }
       }
   // Large-small: each large body scans the cells within its reach.
@@ -215,11 +225,14 @@ void NeighborList::list_all(const ContactElements& p, double skin, const History
       c0[d] = cell_coord(p.x[p.stride * li + d] - reach, d);
       c1[d] = cell_coord(p.x[p.stride * li + d] + reach, d);
     }
+    const bool ghost = static_cast<std::size_t>(li) >= p.owned;
     for (int z = c0[2]; z <= c1[2]; ++z)
       for (int y = c0[1]; y <= c1[1]; ++y)
         for (int x = c0[0]; x <= c1[0]; ++x) {
           const int cc = (z * nc[1] + y) * nc[0] + x;
-          for (int k = cell_start_[cc]; k < cell_start_[cc + 1]; ++k) consider(li, cell_items_[k]);
+          const int stop = ghost ? cell_owned_end_[cc] : cell_start_[cc + 1];
+          tests += static_cast<std::size_t>(stop - cell_start_[cc]);
+          for (int k = cell_start_[cc]; k < stop; ++k) consider(li, cell_items_[k]);
         }
   }
   // Large-large: few of them, all pairs.
@@ -277,7 +290,7 @@ bool NeighborList::relist(const ContactElements& p, double skin, const std::vect
   // The elements listed again since the last bin lie in moved_cells_ at their current place; the
   // others in the cells, within skin/2 of where they were binned (none of them is stale). When the
   // moved ones are many, all are binned again.
-  if (moved_.size() != n || 8 * (moved_list_.size() + stale_elements) > n) bin(p, skin);
+  if (moved_.size() != n || binned_owned_ != p.owned || 8 * (moved_list_.size() + stale_elements) > n) bin(p, skin);
   // A stale element left out at the bin joins the moved ones once it is near the sub-box; until then
   // no owned element can reach it, and it searches nothing (theory T5b).
   auto searched = [&](std::size_t a) { return cell_of_[a] != kFar || moved_[a] || p.near(a); };
@@ -306,6 +319,7 @@ bool NeighborList::relist(const ContactElements& p, double skin, const std::vect
   };
   for (std::size_t a = 0; a < n; ++a) {
     if (!stale_el_[a] || !searched(a)) continue;
+    const bool ghost = a >= p.owned;  // its partners are owned: the cells' owned prefixes (T5c)
     const double* xa = &p.x[p.stride * a];
     const double reach = p.radius[a] + r_ref_ + skin + fresh_travel, binned_reach = reach + 0.5 * skin;
     int c0[3], c1[3], m0[3], m1[3];
@@ -317,7 +331,9 @@ bool NeighborList::relist(const ContactElements& p, double skin, const std::vect
       for (int y = c0[1]; y <= c1[1]; ++y)
         for (int x = c0[0]; x <= c1[0]; ++x) {
           const int cc = (z * nc_[1] + y) * nc_[0] + x;
-          for (int k = cell_start_[cc]; k < cell_start_[cc + 1]; ++k) {
+          const int stop = ghost ? cell_owned_end_[cc] : cell_start_[cc + 1];
+          tests += static_cast<std::size_t>(stop - cell_start_[cc]);
+          for (int k = cell_start_[cc]; k < stop; ++k) {
             const auto b = static_cast<std::size_t>(cell_items_[k]);
             if (!moved_[b]) from(a, b);
           }
@@ -326,7 +342,11 @@ bool NeighborList::relist(const ContactElements& p, double skin, const std::vect
       for (int y = m0[1]; y <= m1[1]; ++y) {
         const int row = (z * nc_[1] + y) * nc_[0];
         auto it = std::lower_bound(moved_cells_.begin(), moved_cells_.end(), std::pair<std::int32_t, std::int32_t>{row + m0[0], -1});
-        for (; it != moved_cells_.end() && it->first <= row + m1[0]; ++it) from(a, static_cast<std::size_t>(it->second));
+        for (; it != moved_cells_.end() && it->first <= row + m1[0]; ++it) {
+          const auto b = static_cast<std::size_t>(it->second);
+          ++tests;
+          if (!ghost || b < p.owned) from(a, b);
+        }
       }
     for (const auto l : large_) from(a, static_cast<std::size_t>(l));  // always at their current place
   }

@@ -75,6 +75,9 @@ class NeighborList {
   std::vector<double> meff;     // m_a m_b / (m_a + m_b), constant while listed
 
   std::size_t builds = 0, relists = 0;
+  // Work counter: the elements the searches met (each a place read, most rejected at once), over
+  // every build and relist; a ghost meets the owned elements only (theory T5c).
+  std::size_t tests = 0;
   // Elements the last bin() left out (ghosts outside the near box), and those it binned.
   std::size_t left_out = 0, binned = 0;
 
@@ -87,6 +90,8 @@ class NeighborList {
   std::vector<PairKey> previous_keys_;
   std::vector<double> previous_history_;
   std::vector<std::int32_t> cell_start_, cell_items_, cell_of_, large_;  // cell_of_: -1 large, kFar left out
+  std::vector<std::int32_t> cell_owned_end_;  // per cell: where its owned items end (they come first)
+  std::size_t binned_owned_ = 0;             // p.owned at the last bin()
   static constexpr std::int32_t kFar = -2;
   // list_all(): the binned elements' places and radii (x, y, z, r) and bodies in cell_items_'
   // order, so that the half stencil reads them in sequence rather than scattered over the arrays.

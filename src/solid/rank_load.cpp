@@ -33,6 +33,45 @@ void for_each_listed_pair(const std::vector<Vec3>& x, const std::vector<double>&
     f(static_cast<std::size_t>(list.first[k]), static_cast<std::size_t>(list.second[k]));
 }
 
+// The elements one rank's whole listing meets (NeighborList::tests): its owned bodies' elements
+// first, then the listed ghosts' (each body's elements consecutive, as the DEM stores them), keyed
+// by their global index.
+double rank_list_tests(const ElementPlaces& el, const std::vector<std::size_t>& owned_bodies,
+                       const std::vector<std::pair<std::size_t, std::size_t>>& ghost_elements, double skin) {
+  std::vector<double> flat, radius, mass;
+  std::vector<std::int64_t> key;
+  std::vector<std::int32_t> body;
+  auto add = [&](std::size_t e, std::int32_t b) {
+    for (int d = 0; d < 3; ++d) flat.push_back(el.x[e][d]);
+    radius.push_back(el.radius[e]);
+    key.push_back(static_cast<std::int64_t>(e));
+    body.push_back(b);
+  };
+  std::int32_t local = 0;  // local body index
+  for (const std::size_t a : owned_bodies) {
+    for (std::size_t e = el.first[a]; e < el.first[a + 1]; ++e) add(e, local);
+    ++local;
+  }
+  const std::size_t owned = radius.size();
+  for (std::size_t k = 0; k < ghost_elements.size(); ++k) {  // grouped by body
+    if (k > 0 && ghost_elements[k].first != ghost_elements[k - 1].first) ++local;
+    add(ghost_elements[k].second, local);
+  }
+  if (radius.empty()) return 0.0;
+  mass.assign(static_cast<std::size_t>(local) + 1, 1.0);
+  ContactElements e;
+  e.size = radius.size();
+  e.owned = owned;
+  e.x = flat.data();
+  e.radius = radius.data();
+  e.key = key.data();
+  e.body = body.data();
+  e.body_mass = mass.data();
+  NeighborList list;
+  list.build(e, skin, {});
+  return static_cast<double>(list.tests);
+}
+
 }  // namespace
 
 std::vector<double> listed_pairs_per_body(const std::vector<Vec3>& x, const std::vector<double>& radius, double skin) {
@@ -54,6 +93,10 @@ RankLoad dem_rank_load(const std::vector<Vec3>& x, const std::vector<double>& ra
   if (lays_out) load.laid_out.assign(ranks, 0.0);
   if (elements) load.owned_elements.assign(ranks, 0.0), load.listed_ghost_elements.assign(ranks, 0.0);
   if (x.empty()) return load;
+  // Each rank's owned bodies and listed ghost elements (body, element), for its list's work.
+  const bool lists = elements && elements->radius.size() == elements->x.size();
+  std::vector<std::vector<std::size_t>> owned_bodies(lists ? ranks : 0);
+  std::vector<std::vector<std::pair<std::size_t, std::size_t>>> ghost_elements(lists ? ranks : 0);
   std::array<std::vector<double>, 3> planes;  // dims[d] + 1 planes per direction
   for (int d = 0; d < 3; ++d) {
     planes[d].push_back(lo[d]);
@@ -73,6 +116,7 @@ RankLoad dem_rank_load(const std::vector<Vec3>& x, const std::vector<double>& ra
     load.bodies[owner[a]] += 1;
     if (lays_out) load.laid_out[owner[a]] += 1;
     if (elements) load.owned_elements[owner[a]] += static_cast<double>(elements->first[a + 1] - elements->first[a]);
+    if (lists) owned_bodies[owner[a]].push_back(a);
     // Ghosts: per direction, the slab itself or a neighbour across a face within the reach; every
     // combination but the body's own cell is a rank holding a copy.
     const double reach = radius[a] + r_max + skin;
@@ -110,6 +154,7 @@ RankLoad dem_rank_load(const std::vector<Vec3>& x, const std::vector<double>& ra
                 if (t[d] + 1 < dims[d] && elements->x[e][d] > planes[d][i + 1] + elements->margin) near = false;
               }
               load.listed_ghost_elements[r] += near;
+              if (lists && near) ghost_elements[r].emplace_back(a, e);
             }
           }
           // It arrives in the last direction in which it moves (x, then y, then z).
@@ -125,6 +170,14 @@ RankLoad dem_rank_load(const std::vector<Vec3>& x, const std::vector<double>& ra
     load.pairs[owner[a]] += 1;
     if (owner[b] != owner[a]) load.pairs[owner[b]] += 1;
   });
+  if (lists) {
+    load.list_tests.assign(ranks, 0.0);
+    for (std::size_t r = 0; r < ranks; ++r) {
+      load.list_tests[r] = rank_list_tests(*elements, owned_bodies[r], ghost_elements[r], skin);
+      std::vector<std::size_t>().swap(owned_bodies[r]);
+      std::vector<std::pair<std::size_t, std::size_t>>().swap(ghost_elements[r]);
+    }
+  }
   return load;
 }
 

@@ -31,6 +31,9 @@ struct RankLoad {
   // ghosts' elements its list bins (those within the margin of its faces with a neighbour, theory
   // T5b; DemSolver's listed_elements() is their sum at a whole list).
   std::vector<double> owned_elements, listed_ghost_elements;
+  // And the elements a whole listing's searches meet on each rank (NeighborList::tests: the list's
+  // work, theory T5c), from that rank's list made here; when the elements' radii are given.
+  std::vector<double> list_tests;
   double total_pairs = 0;  // distinct listed pairs
 };
 
@@ -44,6 +47,7 @@ struct ElementPlaces {
   std::vector<Vec3> x;
   std::vector<std::size_t> first;
   double margin = 0;
+  std::vector<double> radius;  // per element; empty: the ranks' lists are not made (no list_tests)
 };
 
 // x: body centres, radius: their radii; dims and interior cuts as Decomposition's; skin the

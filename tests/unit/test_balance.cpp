@@ -160,3 +160,37 @@ TEST(Balance, ABoxOfCellsWeighsAsItsCells) {
   EXPECT_EQ(from_boxes[0][0], from_cells[0][0]);
   EXPECT_TRUE(from_boxes[1].empty() && from_boxes[2].empty());
 }
+
+// Two stages that each wait for their busiest rank, 2 ranks along x of a unit box on 1/64 cell
+// faces: the cells (stage A) fill the box evenly, weight 1; the bodies' work (stage B), weight 1,
+// fills x < 1/2 evenly (64 samples). By hand: the summed work's cut is at 1/3 (x + 2x = 1), where
+// the stages' busiest ranks hold 2/3 + 2/3 against means 1/2 + 1/2: 1.333; the cells' own cut 1/2
+// gives 1/2 + 1 (1.5); the bodies' own cut 1/4 gives 3/4 + 1/2 (1.25), the least of all cuts:
+// max(x, 1 - x) + max(2x, 1 - 2x), with means 1/2 + 1/2, is least at x = 1/4.
+TEST(Balance, StagedWorkTakesTheCutsWhoseBusiestRanksSumLeast) {
+  const Vec3 lo{0, 0, 0}, hi{1, 1, 1}, spacing{1.0 / 64, 1.0 / 64, 1.0 / 64};
+  StageWork cells{{}, {WorkBox{lo, hi, 1.0}}}, bodies;
+  for (int i = 0; i < 64; ++i) bodies.samples.push_back({{(i + 0.5) / 128, 0.5, 0.5}, 1.0 / 64});
+  const CutPlanes third{{{1.0 / 3}, {}, {}}};
+  const auto summed = rank_work(MPI_COMM_SELF, cells, lo, hi, {2, 1, 1}, third);
+  EXPECT_NEAR(summed[0], 1.0 / 3, 1e-12);  // the box shared by volume
+  const StagedCuts best = staged_cuts(MPI_COMM_SELF, {cells, bodies}, lo, hi, {2, 1, 1}, {}, spacing);
+  ASSERT_EQ(best.cuts[0].size(), 1u);
+  std::printf("staged cut %.6f (%s), staged imbalance %.4f\n", best.cuts[0][0], best.candidate.c_str(), best.imbalance);
+  EXPECT_NEAR(best.cuts[0][0], 0.25, 1e-12);
+  EXPECT_NEAR(best.imbalance, 1.25, 1e-9);
+  EXPECT_EQ(best.candidate, "stage 1");  // the bodies' own cuts
+  // Cuts now that cost as little are kept.
+  const CutPlanes now{{{0.25}, {}, {}}};
+  EXPECT_EQ(staged_cuts(MPI_COMM_SELF, {cells, bodies}, lo, hi, {2, 1, 1}, {}, spacing, 4096, &now).candidate, "current");
+  // The summed work's cut, as balanced_cuts gives it, costs more.
+  StageWork both = bodies;
+  both.boxes = cells.boxes;
+  const auto sum_cuts = balanced_cuts(MPI_COMM_SELF, both.samples, lo, hi, {2, 1, 1}, {}, spacing, 4096, both.boxes);
+  const double at_sum = staged_imbalance({rank_work(MPI_COMM_SELF, cells, lo, hi, {2, 1, 1}, sum_cuts),
+                                          rank_work(MPI_COMM_SELF, bodies, lo, hi, {2, 1, 1}, sum_cuts)});
+  std::printf("the summed work's cut %.6f: staged imbalance %.4f\n", sum_cuts[0][0], at_sum);
+  EXPECT_NEAR(sum_cuts[0][0], 1.0 / 3, 1.0 / 64);
+  EXPECT_GT(at_sum, 1.3);
+  EXPECT_DOUBLE_EQ(staged_imbalance({{1, 1}, {2, 0}}), 3.0 / 2.0);
+}

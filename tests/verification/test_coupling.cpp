@@ -217,7 +217,7 @@ TEST(SolidFraction, EachRankLaysOutTheBodiesTheScalingModelCounts) {
     const Quaternion q = turn(static_cast<int>(b));
     const double qn = std::sqrt(q.norm2());
     const Quaternion qu{q.w / qn, q.x / qn, q.y / qn, q.z / qn};
-    for (const Vec3& c : t.spheres) elements.x.push_back(xs[b] + qu.rotate(c));
+    for (const Vec3& c : t.spheres) elements.x.push_back(xs[b] + qu.rotate(c)), elements.radius.push_back(t.sphere_radius);
   }
   elements.first.push_back(elements.x.size());
   const RankLoad load = dem_rank_load(xs, radius, {0, 0, 0}, {kBox, kBox, kBox}, dims, rig.decomp->interior_cuts(),
@@ -230,6 +230,11 @@ TEST(SolidFraction, EachRankLaysOutTheBodiesTheScalingModelCounts) {
   EXPECT_EQ(load.owned_elements[me] + load.listed_ghost_elements[me], static_cast<double>(rig.dem->listed_elements()));
   const double ghost_elements = static_cast<double>(rig.dem->particles().ghosts * t.spheres.size());
   EXPECT_EQ(ghost_elements - load.listed_ghost_elements[me], static_cast<double>(rig.dem->ghost_elements_left_out()));
+  // The list's work (theory T5c): the elements its one whole listing met, made again here per rank.
+  ASSERT_EQ(rig.dem->list_builds(), 1u);
+  ASSERT_EQ(rig.dem->list_relists(), 0u);
+  EXPECT_GT(load.list_tests[me], 0.0);
+  EXPECT_EQ(load.list_tests[me], static_cast<double>(rig.dem->list_tests()));
   if (load.ghosts.size() > 1) {  // some ghost elements listed, some left out
     double listed = 0, all = 0;
     for (std::size_t r = 0; r < load.ghosts.size(); ++r)
