@@ -10,25 +10,37 @@ namespace tessera {
 
 namespace {
 
+// The run's list made over these elements (3 coordinates each, unit masses; body empty: element i
+// is body i), the first `owned` of them owned.
+NeighborList made_list(const std::vector<double>& flat, const std::vector<double>& radius,
+                       const std::vector<std::int64_t>& key, const std::vector<std::int32_t>& body, std::size_t owned,
+                       double skin) {
+  const std::vector<double> mass(body.empty() ? radius.size() : static_cast<std::size_t>(body.back()) + 1, 1.0);
+  ContactElements e;
+  e.size = radius.size();
+  e.owned = owned;
+  e.x = flat.data();
+  e.radius = radius.data();
+  e.key = key.data();
+  e.body = body.empty() ? nullptr : body.data();
+  e.body_mass = mass.data();
+  NeighborList list;
+  list.build(e, skin, {});
+  return list;
+}
+
 // Every pair the run's neighbour list would list (closer than r_a + r_b + skin): the list itself,
 // built over all bodies as if one rank owned them.
 template <class F>
 void for_each_listed_pair(const std::vector<Vec3>& x, const std::vector<double>& radius, double skin, F&& f) {
   if (x.empty()) return;
-  std::vector<double> flat(3 * x.size()), mass(x.size(), 1.0);
+  std::vector<double> flat(3 * x.size());
   std::vector<std::int64_t> key(x.size());
   for (std::size_t a = 0; a < x.size(); ++a) {
     for (int d = 0; d < 3; ++d) flat[3 * a + static_cast<std::size_t>(d)] = x[a][d];
     key[a] = static_cast<std::int64_t>(a);
   }
-  ContactElements e;
-  e.size = e.owned = x.size();
-  e.x = flat.data();
-  e.radius = radius.data();
-  e.key = key.data();
-  e.body_mass = mass.data();
-  NeighborList list;
-  list.build(e, skin, {});
+  const NeighborList list = made_list(flat, radius, key, {}, x.size(), skin);
   for (std::size_t k = 0; k < list.size(); ++k)
     f(static_cast<std::size_t>(list.first[k]), static_cast<std::size_t>(list.second[k]));
 }
@@ -38,7 +50,7 @@ void for_each_listed_pair(const std::vector<Vec3>& x, const std::vector<double>&
 // by their global index.
 double rank_list_tests(const ElementPlaces& el, const std::vector<std::size_t>& owned_bodies,
                        const std::vector<std::pair<std::size_t, std::size_t>>& ghost_elements, double skin) {
-  std::vector<double> flat, radius, mass;
+  std::vector<double> flat, radius;
   std::vector<std::int64_t> key;
   std::vector<std::int32_t> body;
   auto add = [&](std::size_t e, std::int32_t b) {
@@ -58,18 +70,7 @@ double rank_list_tests(const ElementPlaces& el, const std::vector<std::size_t>& 
     add(ghost_elements[k].second, local);
   }
   if (radius.empty()) return 0.0;
-  mass.assign(static_cast<std::size_t>(local) + 1, 1.0);
-  ContactElements e;
-  e.size = radius.size();
-  e.owned = owned;
-  e.x = flat.data();
-  e.radius = radius.data();
-  e.key = key.data();
-  e.body = body.data();
-  e.body_mass = mass.data();
-  NeighborList list;
-  list.build(e, skin, {});
-  return static_cast<double>(list.tests);
+  return static_cast<double>(made_list(flat, radius, key, body, owned, skin).tests);
 }
 
 }  // namespace
