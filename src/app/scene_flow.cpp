@@ -419,7 +419,8 @@ double FlowScene::rank_work(double cells_weight, const std::vector<WorkSample>& 
 // Every balance.interval steps: the ranks' work in the step's two stages (their flow cells, their
 // bodies), each stage waiting for its busiest rank; above the threshold (the staged imbalance) the
 // cut planes move to those of staged_cuts' candidates that make the stages' busiest ranks' sum
-// least, on cell faces, each slab at least two cells (the halo) and the DEM's contact reach wide.
+// least, on cell faces (or equal slabs, as an unbalanced run has them: a rank owns the cells whose
+// centres its slab holds), each slab at least two cells (the halo) and the DEM's contact reach wide.
 void FlowScene::balance_if_due(const RunOptions& opt) {
   if (!balance_.due(flow_->steps(), decomp_->size())) return;
   MPI_Comm comm = decomp_->comm();
