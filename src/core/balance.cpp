@@ -77,6 +77,23 @@ CutPlanes equal_cuts(const Vec3& lo, const Vec3& hi, std::array<int, 3> dims) {
   return cuts;
 }
 
+std::vector<double> cell_block_cuts(double lo, double hi, int cells, int parts) {
+  std::vector<double> cuts;
+  if (parts < 2 || cells < parts) return cuts;
+  // The largest block equal slabs give (their cells by centre), and the 2^k units that reach it.
+  const int largest = (cells + parts - 1) / parts;
+  int unit = 1;
+  for (int u = 2; cells % u == 0; u *= 2) {
+    const int units = cells / u, most = (units + parts - 1) / parts * u, least = units / parts * u;
+    if (most > largest || 10 * least < 9 * cells / parts) break;
+    unit = u;
+  }
+  const int units = cells / unit;
+  const double h = (hi - lo) / cells;
+  for (int i = 1; i < parts; ++i) cuts.push_back(lo + static_cast<double>(i * units / parts * unit) * h);
+  return cuts;
+}
+
 int grid_cell(const Vec3& x, std::array<int, 3> dims, const CutPlanes& interior) {
   int r = 0, stride = 1;
   for (int d = 0; d < 3; ++d) {
@@ -213,7 +230,10 @@ StagedCuts staged_cuts(MPI_Comm comm, const std::vector<StageWork>& stages, cons
       candidates.emplace_back(blend, "stage " + std::to_string(k) + (t < 1 ? " at " + std::to_string(t).substr(0, 4) : ""));
     }
   }
-  candidates.emplace_back(equal_cuts(lo, hi, dims), "equal");
+  CutPlanes equal = equal_cuts(lo, hi, dims);
+  for (int d = 0; d < 3; ++d)  // on cells: in blocks the multigrid halves evenly (cell_block_cuts)
+    if (spacing[d] > 0) equal[d] = cell_block_cuts(lo[d], hi[d], static_cast<int>(std::lround((hi[d] - lo[d]) / spacing[d])), dims[d]);
+  candidates.emplace_back(equal, "equal");
   StagedCuts best;
   best.imbalance = HUGE_VAL;
   for (const auto& [cuts, name] : candidates) {

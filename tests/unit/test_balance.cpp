@@ -194,3 +194,32 @@ TEST(Balance, StagedWorkTakesTheCutsWhoseBusiestRanksSumLeast) {
   EXPECT_GT(at_sum, 1.3);
   EXPECT_DOUBLE_EQ(staged_imbalance({{1, 1}, {2, 0}}), 3.0 / 2.0);
 }
+
+// Equal slabs of whole cells in blocks of 2^k cells (cell_block_cuts): the paper drop's 176 cells
+// over 5, 10 and 20 ranks by hand (4-cell blocks, 2-cell blocks, none: 2-cell blocks would make a
+// 10-cell slab where equal slabs make 9); and over a sweep of rows and rank counts the largest slab
+// never exceeds ceil(cells / parts) and the smallest is at least equal slabs' smallest
+// (floor(cells / parts)) or 0.9 of the mean.
+TEST(Balance, CellBlocksAreAsLargeAsEqualSlabsAndHalveEvenly) {
+  auto blocks = [](int cells, int parts) {
+    const auto cuts = cell_block_cuts(0.0, 1.0, cells, parts);
+    std::vector<int> b;
+    double prev = 0;
+    for (const double c : cuts) b.push_back(int(std::lround((c - prev) * cells))), prev = c;
+    b.push_back(int(std::lround((1.0 - prev) * cells)));
+    return b;
+  };
+  EXPECT_EQ(blocks(176, 5), (std::vector<int>{32, 36, 36, 36, 36}));
+  EXPECT_EQ(blocks(176, 10), (std::vector<int>{16, 18, 18, 18, 18, 16, 18, 18, 18, 18}));
+  for (const int b : blocks(176, 20)) EXPECT_TRUE(b == 8 || b == 9) << b;
+  for (int cells = 8; cells <= 260; cells += 6)
+    for (int parts = 2; parts <= cells / 2; parts += 3) {
+      const auto b = blocks(cells, parts);
+      ASSERT_EQ(int(b.size()), parts);
+      int sum = 0, most = 0, least = cells;
+      for (const int x : b) sum += x, most = std::max(most, x), least = std::min(least, x);
+      EXPECT_EQ(sum, cells);
+      EXPECT_LE(most, (cells + parts - 1) / parts) << cells << " / " << parts;
+      EXPECT_TRUE(least >= cells / parts || 10 * least >= 9 * cells / parts) << cells << " / " << parts;
+    }
+}
