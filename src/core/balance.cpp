@@ -230,10 +230,15 @@ StagedCuts staged_cuts(MPI_Comm comm, const std::vector<StageWork>& stages, cons
       candidates.emplace_back(blend, "stage " + std::to_string(k) + (t < 1 ? " at " + std::to_string(t).substr(0, 4) : ""));
     }
   }
-  CutPlanes equal = equal_cuts(lo, hi, dims);
+  CutPlanes blocks = equal_cuts(lo, hi, dims);
+  bool on_cells = false;
   for (int d = 0; d < 3; ++d)  // on cells: in blocks the multigrid halves evenly (cell_block_cuts)
-    if (spacing[d] > 0) equal[d] = cell_block_cuts(lo[d], hi[d], static_cast<int>(std::lround((hi[d] - lo[d]) / spacing[d])), dims[d]);
-  candidates.emplace_back(equal, "equal");
+    if (spacing[d] > 0 && dims[d] > 1) {
+      auto c = cell_block_cuts(lo[d], hi[d], static_cast<int>(std::lround((hi[d] - lo[d]) / spacing[d])), dims[d]);
+      if (c.size() == blocks[d].size()) blocks[d] = std::move(c), on_cells = true;
+    }
+  if (on_cells) candidates.emplace_back(blocks, "cell blocks");
+  candidates.emplace_back(equal_cuts(lo, hi, dims), "equal");
   StagedCuts best;
   best.imbalance = HUGE_VAL;
   for (const auto& [cuts, name] : candidates) {

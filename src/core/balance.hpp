@@ -89,12 +89,13 @@ std::vector<double> rank_work(MPI_Comm comm, const StageWork& stage, const Vec3&
 // staged step fastest when the stages' work lies differently (the flow's cells fill the box evenly,
 // the bodies' work thins out at the walls and comes in whole grains): among the cuts now (when
 // given; kept on a tie), those that balance the summed work, those that balance each stage alone
-// and blends of the two (these on the spacing), and equal slabs (as an unbalanced run has them),
-// the cuts whose staged imbalance is least.
+// and blends of the two (these on the spacing), equal slabs on the spacing in blocks the multigrid
+// halves evenly (cell_block_cuts: a flow run's default) and equal slabs, the cuts whose staged
+// imbalance is least.
 struct StagedCuts {
   CutPlanes cuts;
   double imbalance = 1;   // staged_imbalance at these cuts
-  std::string candidate;  // "current", "summed", "stage K at T" (a blend), "stage K", "equal"
+  std::string candidate;  // "current", "summed", "stage K at T" (a blend), "stage K", "cell blocks", "equal"
 };
 StagedCuts staged_cuts(MPI_Comm comm, const std::vector<StageWork>& stages, const Vec3& lo, const Vec3& hi,
                        std::array<int, 3> dims, const Vec3& min_width = {}, const Vec3& spacing = {}, int bins = 4096,
