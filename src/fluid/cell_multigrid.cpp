@@ -5,6 +5,7 @@
 
 #include "core/errors.hpp"
 #include "fluid/cell_multigrid_detail.hpp"
+#include "fluid/multigrid_plan.hpp"
 #include "fluid/petsc_check.hpp"
 
 namespace tessera {
@@ -15,8 +16,6 @@ using multigrid_detail::for_owned;
 
 constexpr auto check = petsc_check;
 
-constexpr long kCoarsestCells = 256;  // stop coarsening below this many cells in all
-constexpr long kTwoLayersFace = 2048;  // two ghost layers on a level whose faces are at most this
 
 // Walks level L's owned rows in storage order: each row's first owned cell in the ghosted array,
 // and its first entry in a PETSc vector of the owned cells (x fastest).
@@ -62,63 +61,90 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
   const PetscInt* own0[3];
   check(DMDAGetOwnershipRanges(fine, &own0[0], &own0[1], &own0[2]), "DMDAGetOwnershipRanges");
   MPI_Comm_dup(grid.comm(), &transfer_comm_);
-  // The level being made, known on every rank: its process grid, each block's length per
-  // direction, the rank (on transfer_comm_) of each block (x fastest), and this rank's place.
   std::array<int, 3> procs{int(pm), int(pn), int(pp)};
-  std::array<std::vector<PetscInt>, 3> own;
-  for (int d = 0; d < 3; ++d) own[d].assign(own0[d], own0[d] + procs[d]);
+  std::array<std::vector<int>, 3> blocks;
+  for (int d = 0; d < 3; ++d) blocks[d].assign(own0[d], own0[d] + procs[d]);
+  const auto plan = plan_multigrid(blocks, {grid.periodic(0), grid.periodic(1), grid.periodic(2)}, ghost_layers_);
+  // The ranks of the level being made, known on every rank: the rank (on transfer_comm_) of each
+  // block (x fastest), and this rank's place.
   std::vector<int> rank_of(std::size_t{1} * procs[0] * procs[1] * procs[2]);
   for (std::size_t r = 0; r < rank_of.size(); ++r) rank_of[r] = int(r);
   auto linear = [](const std::array<int, 3>& c, const std::array<int, 3>& p) { return c[0] + p[0] * (c[1] + p[1] * c[2]); };
   const int me = grid.rank();
   std::array<int, 3> coords{me % procs[0], (me / procs[0]) % procs[1], me / (procs[0] * procs[1])};
-  bool active = true, gathered = false;
+  bool active = true;
   MPI_Comm comm = grid.comm();
-  Level::Part part;
-  std::vector<Level::Part> parts;
-  std::array<int, 3> n{int(M), int(N), int(P)};
-  std::array<std::vector<int>, 3> fine_start;  // of the level being made; empty for the finest
-  while (true) {
+  for (const MultigridLevelPlan& plan_level : plan) {
     auto L = std::make_unique<Level>();
-    L->n = n;
-    L->fine_start = fine_start;
-    for (int d = 0; d < 3 && !fine_start[d].empty(); ++d)
-      for (int I = 0; I < n[d]; ++I) L->aggregate_of[d].insert(L->aggregate_of[d].end(), L->width(d, I), I);
+    Level::Part part;
+    std::vector<Level::Part> parts;
+    if (plan_level.gathered()) {
+      // Each finer rank's part: the aggregates of its block; ranks 2c and 2c + 1 along a merged
+      // direction hand theirs to 2c, which owns both from here down.
+      const auto& merge = plan_level.merged;
+      auto part_of = [&](const std::array<int, 3>& c) {
+        Level::Part q;
+        q.rank = rank_of[std::size_t(linear(c, procs))];
+        for (int d = 0; d < 3; ++d) {
+          for (int b = 0; b < c[d]; ++b) q.s[d] += plan_level.parts[d][std::size_t(b)];
+          q.m[d] = plan_level.parts[d][std::size_t(c[d])];
+        }
+        return q;
+      };
+      const std::array<int, 3> next_procs = plan_level.procs();
+      std::vector<int> next_rank_of(std::size_t{1} * next_procs[0] * next_procs[1] * next_procs[2]);
+      for (int c2 = 0; c2 < next_procs[2]; ++c2)
+        for (int c1 = 0; c1 < next_procs[1]; ++c1)
+          for (int c0 = 0; c0 < next_procs[0]; ++c0) {
+            const std::array<int, 3> c{c0, c1, c2}, f{merge[0] ? 2 * c0 : c0, merge[1] ? 2 * c1 : c1, merge[2] ? 2 * c2 : c2};
+            next_rank_of[std::size_t(linear(c, next_procs))] = rank_of[std::size_t(linear(f, procs))];
+          }
+      std::array<int, 3> next_coords = coords;
+      bool owner = active;
+      for (int d = 0; d < 3; ++d)
+        if (merge[d]) next_coords[d] = coords[d] / 2, owner = owner && coords[d] % 2 == 0;
+      if (active) {
+        part = part_of(coords);
+        part.rank = next_rank_of[std::size_t(linear(next_coords, next_procs))];  // its owner
+      }
+      if (owner)  // the finer blocks whose aggregates this rank owns, in their ranks' order
+        for (int c2 = 0; c2 < procs[2]; ++c2)
+          for (int c1 = 0; c1 < procs[1]; ++c1)
+            for (int c0 = 0; c0 < procs[0]; ++c0) {
+              const std::array<int, 3> c{c0, c1, c2};
+              bool mine = true;
+              for (int d = 0; d < 3; ++d) mine = mine && (merge[d] ? c[d] / 2 : c[d]) == next_coords[d];
+              if (mine) parts.push_back(part_of(c));
+            }
+      MPI_Comm next = MPI_COMM_NULL;
+      MPI_Comm_split(grid.comm(), owner ? 0 : MPI_UNDEFINED, linear(next_coords, next_procs), &next);
+      if (next != MPI_COMM_NULL) level_comms_.push_back(next);
+      comm = next;
+      active = owner;
+      procs = next_procs;
+      coords = next_coords;
+      rank_of = next_rank_of;
+    }
+    L->n = plan_level.n;
+    L->fine_start = plan_level.fine_start;
+    for (int d = 0; d < 3 && !L->fine_start[d].empty(); ++d)
+      for (int I = 0; I < L->n[d]; ++I) L->aggregate_of[d].insert(L->aggregate_of[d].end(), L->width(d, I), I);
     L->active = active;
     L->comm = active ? comm : MPI_COMM_NULL;
     L->procs = procs;
     L->coords = coords;
-    L->gathered = gathered;
+    L->gathered = plan_level.gathered();
     L->part = part;
     L->parts = parts;
     L->inbox.resize(parts.size());
     if (active) {
-      // Two ghost layers where every block along each direction with a neighbour (a rank, or a
-      // periodic image) is at least 2 cells across: the layers sent are owned cells.
-      // Only where an exchange is latency-bound: every rank's face across a split direction at
-      // most kTwoLayersFace cells (a layer of 2,048 cells is 16 kB, about what this host's
-      // point-to-point bandwidth moves in one latency, 1.9 us x 9.8 GB/s; docs/performance.md): on
-      // large faces the second layer's bytes and the ghost layer's updates cost more than the
-      // latency saved (the V-cycle 3-5 % slower on 2 ranks of the paper drop's grid).
-      L->layers = 1;
-      bool neighbours = false;  // else nothing is exchanged: one layer (the smaller arrays)
-      for (int d = 0; d < 3; ++d) neighbours = neighbours || procs[d] > 1 || grid.periodic(d);
-      if (ghost_layers_ >= 2 && neighbours) {
-        L->layers = 2;
-        for (int d = 0; d < 3; ++d)
-          if (procs[d] > 1 || grid.periodic(d)) {
-            for (PetscInt c : own[d]) L->layers = c < 2 ? 1 : L->layers;
-            const auto& a = own[(d + 1) % 3];
-            const auto& b = own[(d + 2) % 3];
-            const long face = long(*std::max_element(a.begin(), a.end())) * long(*std::max_element(b.begin(), b.end()));
-            if (face > kTwoLayersFace) L->layers = 1;
-          }
-      }
+      L->layers = plan_level.layers;
       const int w = L->layers;
       for (int d = 0; d < 3; ++d) {
+        const auto& own = plan_level.blocks[d];
         L->s[d] = 0;
-        for (int c = 0; c < coords[d]; ++c) L->s[d] += int(own[d][std::size_t(c)]);
-        L->m[d] = int(own[d][std::size_t(coords[d])]);
+        for (int c = 0; c < coords[d]; ++c) L->s[d] += own[std::size_t(c)];
+        L->m[d] = own[std::size_t(coords[d])];
         L->gs[d] = L->s[d] - w;  // ghosts on every side, beyond a domain face too (left at 0 there)
         L->gm[d] = L->m[d] + 2 * w;
       }
@@ -146,84 +172,6 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
       L->b.assign(size, 0.0);
     }
     levels_.push_back(std::move(L));
-    if (long(n[0]) * n[1] * n[2] <= kCoarsestCells) break;
-    // Pair the cells of each rank's block along every direction that can be coarsened (a block
-    // of odd length ends in a single cell; uniform pairs of an even whole where periodic, for the
-    // red-black colouring). Where a block would fall below 2 cells on several ranks, the coarser
-    // level is gathered along that direction: ranks 2c and 2c + 1 hand their aggregates to 2c.
-    std::array<bool, 3> ok{}, merge{};
-    bool any = false;
-    for (int d = 0; d < 3; ++d) {
-      ok[d] = n[d] >= 4 && (!grid.periodic(d) || n[d] % 2 == 0);
-      for (PetscInt c : own[d]) ok[d] = ok[d] && (!grid.periodic(d) || c % 2 == 0);
-      for (PetscInt c : own[d]) merge[d] = merge[d] || (ok[d] && procs[d] > 1 && (c + 1) / 2 < 2);
-      fine_start[d].clear();
-      int first = 0;
-      for (auto& c : own[d]) {
-        const int pairs = ok[d] ? (int(c) + 1) / 2 : int(c);
-        for (int I = 0; I < pairs; ++I) fine_start[d].push_back(first + (ok[d] ? 2 * I : I));
-        first += int(c);
-        c = pairs;
-      }
-      fine_start[d].push_back(first);
-      n[d] = int(fine_start[d].size()) - 1;
-      any = any || ok[d];
-    }
-    if (!any) break;
-    gathered = merge[0] || merge[1] || merge[2];
-    parts.clear();
-    if (!gathered) continue;
-    // Each finer rank's part: the aggregates of its block (`own` holds them per block now).
-    auto part_of = [&](const std::array<int, 3>& c) {
-      Level::Part q;
-      q.rank = rank_of[std::size_t(linear(c, procs))];
-      for (int d = 0; d < 3; ++d) {
-        for (int b = 0; b < c[d]; ++b) q.s[d] += int(own[d][std::size_t(b)]);
-        q.m[d] = int(own[d][std::size_t(c[d])]);
-      }
-      return q;
-    };
-    std::array<int, 3> next_procs;
-    for (int d = 0; d < 3; ++d) next_procs[d] = merge[d] ? (procs[d] + 1) / 2 : procs[d];
-    std::vector<int> next_rank_of(std::size_t{1} * next_procs[0] * next_procs[1] * next_procs[2]);
-    for (int c2 = 0; c2 < next_procs[2]; ++c2)
-      for (int c1 = 0; c1 < next_procs[1]; ++c1)
-        for (int c0 = 0; c0 < next_procs[0]; ++c0) {
-          const std::array<int, 3> c{c0, c1, c2}, f{merge[0] ? 2 * c0 : c0, merge[1] ? 2 * c1 : c1, merge[2] ? 2 * c2 : c2};
-          next_rank_of[std::size_t(linear(c, next_procs))] = rank_of[std::size_t(linear(f, procs))];
-        }
-    std::array<int, 3> next_coords = coords;
-    bool owner = active;
-    for (int d = 0; d < 3; ++d)
-      if (merge[d]) next_coords[d] = coords[d] / 2, owner = owner && coords[d] % 2 == 0;
-    if (active) {
-      part = part_of(coords);
-      part.rank = next_rank_of[std::size_t(linear(next_coords, next_procs))];  // its owner
-    }
-    if (owner)  // the finer blocks whose aggregates this rank owns, in their ranks' order
-      for (int c2 = 0; c2 < procs[2]; ++c2)
-        for (int c1 = 0; c1 < procs[1]; ++c1)
-          for (int c0 = 0; c0 < procs[0]; ++c0) {
-            const std::array<int, 3> c{c0, c1, c2};
-            bool mine = true;
-            for (int d = 0; d < 3; ++d) mine = mine && (merge[d] ? c[d] / 2 : c[d]) == next_coords[d];
-            if (mine) parts.push_back(part_of(c));
-          }
-    for (int d = 0; d < 3; ++d)
-      if (merge[d]) {
-        std::vector<PetscInt> pairs;
-        for (std::size_t b = 0; b < own[d].size(); b += 2)
-          pairs.push_back(own[d][b] + (b + 1 < own[d].size() ? own[d][b + 1] : 0));
-        own[d] = pairs;
-      }
-    MPI_Comm next = MPI_COMM_NULL;
-    MPI_Comm_split(grid.comm(), owner ? 0 : MPI_UNDEFINED, linear(next_coords, next_procs), &next);
-    if (next != MPI_COMM_NULL) level_comms_.push_back(next);
-    comm = next;
-    active = owner;
-    procs = next_procs;
-    coords = next_coords;
-    rank_of = next_rank_of;
   }
 }
 

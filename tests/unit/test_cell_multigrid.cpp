@@ -15,12 +15,15 @@
 #include <mpi.h>
 #include <petscdmda.h>
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "core/decomposition.hpp"
 #include "fluid/cell_multigrid.hpp"
 #include "fluid/fluid_grid.hpp"
+#include "fluid/multigrid_plan.hpp"
 #include "fluid/pressure_poisson.hpp"
 
 using namespace tessera;
@@ -218,6 +221,69 @@ TEST(CellMultigrid, SmallBlocksAreGatheredOntoFewerRanksAndKeepOneRanksLevels) {
       if (ranks[c] != one[c] && differ++ == 0) first = c;
     EXPECT_EQ(differ, 0u) << size << " ranks against 1, x " << boundary_name(x_sides) << ": first at cell " << first
                           << ", " << ranks[first] << " against " << one[first];
+  }
+}
+
+// The plan (fluid/multigrid_plan.hpp) lays out the levels of P ranks from the finest level's cuts
+// alone, for the scaling model: its levels, gathered levels, two-layer levels and coarsest size are
+// the multigrid's own, and its count of a V-cycle's exchanges (plus the operator's one) is what rank
+// 0 (an owner on every level) makes. Odd sizes, periodic x, gathers along one and two directions,
+// one-layer and two-layer levels, on 1, 2 and 4 ranks.
+TEST(CellMultigrid, ThePlanLaysOutItsLevelsAndCountsTheExchangesACycleMakes) {
+  int rank, size;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  struct Case {
+    std::array<int, 3> n, procs;
+    BoundaryKind x_sides;
+    int ghost_layers;
+  };
+  std::vector<Case> cases{{{45, 45, 33}, {0, 0, 0}, BoundaryKind::no_slip, 2},
+                          {{45, 45, 33}, {0, 0, 0}, BoundaryKind::no_slip, 1},
+                          {{32, 30, 30}, {0, 0, 0}, BoundaryKind::periodic, 2},
+                          {{16, 48, 48}, {size, 1, 1}, BoundaryKind::no_slip, 2},
+                          {{16, 48, 48}, {size, 1, 1}, BoundaryKind::periodic, 2},
+                          {{64, 64, 40}, {1, size, 1}, BoundaryKind::no_slip, 2}};
+  if (size == 4) cases.push_back({{8, 8, 96}, {2, 2, 1}, BoundaryKind::no_slip, 2});
+  for (const Case& cs : cases) {
+    Problem P(cs.n, MPI_COMM_WORLD, cs.x_sides, cs.procs);
+    const FluidGrid& g = P.grid;
+    CellMultigrid mg(g, 2, 2, 20, true, cs.ghost_layers);
+    mg.set_coefficients(P.rho);
+    DM dm = g.pressure_dm();
+    PetscInt pm, pn, pp;
+    DMDAGetInfo(dm, nullptr, nullptr, nullptr, nullptr, &pm, &pn, &pp, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr);
+    const PetscInt* own[3];
+    DMDAGetOwnershipRanges(dm, &own[0], &own[1], &own[2]);
+    const PetscInt procs[3] = {pm, pn, pp};
+    std::array<std::vector<int>, 3> blocks;
+    for (int d = 0; d < 3; ++d) blocks[d].assign(own[d], own[d] + procs[d]);
+    const auto plan = plan_multigrid(blocks, {g.periodic(0), g.periodic(1), g.periodic(2)}, cs.ghost_layers);
+    const auto exchanges = multigrid_exchanges(plan, 2, 2, 20, true);
+    Vec x, y;
+    DMCreateGlobalVector(dm, &x);
+    VecDuplicate(x, &y);
+    VecSet(x, 1.0);
+    mg.apply(x, y);
+    mg.apply_operator(x, y);
+    VecDestroy(&x);
+    VecDestroy(&y);
+    const std::string name = std::to_string(cs.n[0]) + " x " + std::to_string(cs.n[1]) + " x " + std::to_string(cs.n[2]) +
+                             " on " + std::to_string(pm) + " x " + std::to_string(pn) + " x " + std::to_string(pp) +
+                             ", x " + boundary_name(cs.x_sides) + ", " + std::to_string(cs.ghost_layers) + " layers";
+    EXPECT_EQ(int(plan.size()), mg.levels()) << name;
+    EXPECT_EQ(plan.back().cells(), mg.coarsest_cells()) << name;
+    EXPECT_EQ(int(std::count_if(plan.begin(), plan.end(), [](const auto& L) { return L.gathered(); })), mg.gathered_levels())
+        << name;
+    if (rank != 0) continue;
+    EXPECT_EQ(int(std::count_if(plan.begin(), plan.end(), [](const auto& L) { return L.layers == 2; })),
+              mg.two_layer_levels()) << name;
+    int planned = 0;
+    for (int e : exchanges) planned += e;
+    EXPECT_EQ(double(planned), mg.exchanges_per_cycle()) << name;
+    if (size > 1) {
+      EXPECT_GT(planned, 0) << name;
+    }
   }
 }
 
