@@ -10,7 +10,8 @@ each run's summary.json into speed-up, parallel efficiency and the time per phas
   tools/scaling.py report --out D [--png FILE]
   tools/scaling.py network --out D          (mpirun -n 2; needs python3-mpi4py) this machine's MPI costs,
         t = latency + bytes / bandwidth fitted over 8 B - 1 MB for the all-gather and for the halo's
-        MPI_Sendrecv, and a two-double all-reduce, in D/network.json
+        MPI_Sendrecv (whose 14 sizes' medians the coupled model prices messages between), messages in
+        flight at once, and a two-double all-reduce, in D/network.json
   tools/scaling.py iterations CASE.yaml --ranks 4,16,25,64,100 [--steps 3] [--cuts-from D/balance.json] --out D
         the Poisson's iterations per flow step on P ranks (oversubscribed: counts, not times) in
         D/iterations.json; the coupled model scales the Poisson's time and messages by them;
@@ -22,7 +23,8 @@ each run's summary.json into speed-up, parallel efficiency and the time per phas
         prints the model's error. The blast (its levelled step), a DEM scene of spheres or discs
         whose bodies --bodies gives (the run's starting checkpoint), or a coupled case (its bed as
         --bodies; D also needs a 2-rank run, whose halo traffic per flow step the model scales;
-        coupled_model below).
+        coupled_model below). --message-cost line: the coupled model's messages priced by the
+        fitted line instead of between the measured sizes.
 
 The blast's model (stability levels): every sub-step takes its busiest rank's work and ends in the
 halo's exchange: each rank sends each neighbour the states of its due elements that the neighbour's
@@ -69,6 +71,30 @@ TESSERA = os.environ.get("TESSERA", os.path.join(ROOT, "build", "bin", "tessera"
 PHASES = [("contact computation", ["contact_forces", "wall_forces"]), ("integration", ["integrate"]),
           ("cell search", ["neighbor"]), ("communication", ["ghost_comm", "migration"]),
           ("waiting", ["reduction"]), ("flow", ["flow", "advect", "viscous", "project"]), ("output", ["output"])]
+
+
+def message_time(net, nbytes, line=False):
+    """One message each way between two ranks carrying nbytes: between the sizes `network` measured
+    (MPI_Sendrecv; piecewise linear, made non-decreasing: a larger message never costs less), beyond
+    the largest at the fitted bandwidth; or, with line (or a network.json without the samples), the
+    latency-bandwidth line fitted over all sizes. The line's latency comes from the large messages'
+    residuals: on this host 3.0-3.6 us against about 1 us measured up to 1 kB, and 4 us against
+    7-9 us measured at 8-16 kB (docs/performance.md)."""
+    lat, bw = net["sendrecv_latency_s"], net["sendrecv_bandwidth_bytes_per_s"]
+    samples = net.get("sendrecv_samples")
+    if line or not samples:
+        return lat + nbytes / bw
+    xs = [r["bytes_each_way"] for r in samples]
+    ys, top = [], 0.0
+    for r in samples:
+        top = max(top, r["seconds"])
+        ys.append(top)
+    if nbytes <= xs[0]:
+        return ys[0]
+    for i in range(1, len(xs)):
+        if nbytes <= xs[i]:
+            return ys[i - 1] + (ys[i] - ys[i - 1]) * (nbytes - xs[i - 1]) / (xs[i] - xs[i - 1])
+    return ys[-1] + (nbytes - xs[-1]) / bw
 
 
 def tessera_args(case, sets, out):
@@ -275,20 +301,25 @@ def network(a):
         dt = (MPI.Wtime() - t) / reps
         rows.append((8.0 * size * (comm.size - 1), comm.allreduce(dt, op=MPI.MAX)))
     # The DEM halo's swap: one MPI_Sendrecv with the neighbour (each rank sends and receives size
-    # doubles), as Halo::forward.
-    swaps = []
+    # doubles), as Halo::forward. Sizes from 8 bytes to 1 MB, close enough together to follow the
+    # protocol changes (this host: about 1 us to 1 kB, then a jump to 6-9 us from 8 to 64 kB): the
+    # scaling model prices each message by its size between these samples. Five rounds over all
+    # sizes, each size's median.
+    sizes = (1, 16, 64, 128, 256, 512, 1024, 2048, 4096, 8192, 16384, 32768, 65536, 131072)
+    times = {size: [] for size in sizes}
     other = (comm.rank + 1) % comm.size
-    for size in (1, 16, 128, 1024, 8192, 65536, 131072):
-        out, back = np.zeros(size), np.zeros(size)
-        for _ in range(20):
-            comm.Sendrecv(out, dest=other, recvbuf=back, source=other)
-        reps = max(20, 20000 // size)
-        comm.Barrier()
-        t = MPI.Wtime()
-        for _ in range(reps):
-            comm.Sendrecv(out, dest=other, recvbuf=back, source=other)
-        dt = (MPI.Wtime() - t) / reps
-        swaps.append((8.0 * size, comm.allreduce(dt, op=MPI.MAX)))
+    for _ in range(5):
+        for size in sizes:
+            out, back = np.zeros(size), np.zeros(size)
+            for _ in range(20):
+                comm.Sendrecv(out, dest=other, recvbuf=back, source=other)
+            reps = max(20, 20000 // size)
+            comm.Barrier()
+            t = MPI.Wtime()
+            for _ in range(reps):
+                comm.Sendrecv(out, dest=other, recvbuf=back, source=other)
+            times[size].append(comm.allreduce((MPI.Wtime() - t) / reps, op=MPI.MAX))
+    swaps = [(8.0 * size, float(np.median(times[size]))) for size in sizes]
     # Messages in flight together (a cell halo's round, fluid/cell_halo.hpp: one message to each
     # neighbour rank): here k small messages (8 doubles) each way at once to the other rank, so that
     # t(k) = t(1) + (k - 1) overhead gives each further message's cost.
@@ -520,10 +551,13 @@ def coupled_model(a, b, runs, net):
     whose nodes reach its cells, over its cells: a ghost's sliver costs less than a whole body) and
     the fluid force with the cells they report (an older `tessera balance`: both per laid-out body);
     each costed by the 1-rank run's timers. Then the
-    exchanges: the field and multigrid halos (their exchanges per flow step, and bytes per face cell,
-    from the 2-rank run's per-rank traffic; at P each exchange pays per split direction one latency,
-    network.json's overhead for the second message, and the busiest rank's two faces' bytes over
-    the bandwidth), the Poisson's 3 reductions per Krylov
+    exchanges: the field halos (their exchanges per flow step, and bytes per face cell, from the
+    2-rank run's per-rank traffic; at P each exchange pays per split direction one message of the
+    busiest rank's face's bytes, priced by its size (message_time), and network.json's overhead for
+    the second side's); the multigrid's, level by level where `tessera balance` laid out its levels
+    at P (fluid/multigrid_plan.hpp: each level's exchanges a V-cycle, layers and faces, its gathers,
+    the coarsest level's all-gather; V-cycles a flow step from the 2-rank run), else scaled from the
+    2-rank run's as the field's (below); the Poisson's 3 reductions per Krylov
     iteration, and per DEM sub-step dem_model's swaps and list check, plus 6 swaps of the bodies' sums
     per flow step (C3's loads, C4a's sums and velocities, C7's moves, the ghosts' refresh). Where
     D/iterations.json counts the Poisson's iterations on P ranks, the Poisson's time, its reductions
@@ -602,6 +636,7 @@ def coupled_model(a, b, runs, net):
         print("scaling model: network.json predates the messages-in-flight measurement; each further message "
               "of an exchange counted as free (run `network` again)")
     overhead = net.get("message_overhead_s", 0.0)
+    line = a.message_cost == "line"
     print(f"model: {b['case']}, {int(N)} cells, {b['count']} bodies, {C:.0f} listed pairs, {steps} flow steps of "
           f"{L:.1f} sub-steps; 1 rank {t1:.2f} s = flow {flow:.2f} + cells' coupling {cellwise:.2f} + bodies' "
           f"coupling {bodywise:.2f} + DEM {contact + per_body + per_list + per_local + dem_rest:.2f} + rest {rest:.2f}; per flow "
@@ -644,27 +679,59 @@ def coupled_model(a, b, runs, net):
             # overhead of its second message (network.json, messages in flight), and the bytes of
             # the busiest rank's two faces.
             sides = {d: min(2, dims[d] - 1) for d in face}
-            per_exchange = {k: sum(lat + (sides[d] - 1) * overhead + per_face[k] * sides[d] * f / bw
+            # Each message priced by its size (message_time): an exchange's bytes along d are the
+            # per-face-cell bytes of the 2-rank run times the busiest rank's face, over its sides.
+            per_exchange = {k: sum(message_time(net, per_face[k] * f, line) + (sides[d] - 1) * overhead
                                    for d, f in face.items()) for k in ("field", "multigrid")}
-            # The multigrid's exchanges scale with the iterations and with its exchanges a cycle
-            # (two ghost layers on a level halve them; which levels have two depends on P).
-            per_cycle = 1.0
-            if count and count.get("exchanges_per_cycle") and two["poisson"].get("exchanges_per_cycle"):
-                per_cycle = count["exchanges_per_cycle"] / two["poisson"]["exchanges_per_cycle"]
-            halo = sum(msgs[k] * (ratio * per_cycle if k == "multigrid" else 1.0) * per_exchange[k]
-                       for k in ("field", "multigrid"))
+            plan = row.get("multigrid_" + cuts)
             reductions = 3 * iters * ratio * math.ceil(math.log2(p)) * red
-            if count and count.get("coarsest_cells") and "latency_s" in net:
-                # The coarsest level's LU on every rank: one all-gather of its right-hand side a cycle.
-                gather = math.ceil(math.log2(p)) * net["latency_s"] + 8.0 * count["coarsest_cells"] / net["bandwidth_bytes_per_s"]
-                reductions += (iters * ratio + 1) * gather
-            if count:
-                reductions += iters * ratio * 2 * count.get("gathered_levels", 0) * lat
-            swaps = sum(2 * (lat + 72.0 * max(load["recv"][r][2 * d + s] for r in range(p) for s in range(2)) / bw)
+            if plan and two["poisson"].get("exchanges_per_cycle"):
+                # The multigrid's levels at P (fluid/multigrid_plan.hpp, laid out by `tessera
+                # balance` on these cuts): each level's exchanges a V-cycle, each exchange along
+                # each split direction a message of its layers' cells (8 bytes each) to each side,
+                # the second side's at the in-flight overhead; a gathered level's parts in and their
+                # corrections out, the owner's further parts at the overhead; the coarsest level's
+                # right-hand side all-gathered for its LU. V-cycles a flow step: the 2-rank run's
+                # (its multigrid exchanges over its exchanges a cycle) times the iterations' ratio.
+                cycles = msgs["multigrid"] / two["poisson"]["exchanges_per_cycle"] * ratio
+                cycle_seconds = 0.0
+                for lv in plan:
+                    lsides = {d: min(2, lv["procs"][d] - 1) for d in range(3) if lv["procs"][d] > 1}
+                    exch = sum(message_time(net, 8.0 * lv["layers"] * lv["face_cells"][d], line) +
+                               (lsides[d] - 1) * overhead for d in lsides)
+                    cycle_seconds += lv["exchanges_per_cycle"] * exch
+                    if lv["gathered"]:
+                        cycle_seconds += 2 * (message_time(net, 8.0 * lv["part_cells"], line) +
+                                              (lv["parts_per_owner"] - 2) * overhead)
+                last = plan[-1]
+                coarsest = last["cells"][0] * last["cells"][1] * last["cells"][2]
+                owners = last["procs"][0] * last["procs"][1] * last["procs"][2]
+                if owners > 1 and "latency_s" in net:
+                    cycle_seconds += (math.ceil(math.log2(owners)) * net["latency_s"] +
+                                      8.0 * coarsest / net["bandwidth_bytes_per_s"])
+                halo = msgs["field"] * per_exchange["field"] + cycles * cycle_seconds
+                per_cycle = sum(lv["exchanges_per_cycle"] for lv in plan) / two["poisson"]["exchanges_per_cycle"]
+            else:
+                # The multigrid's exchanges scale with the iterations and with its exchanges a cycle
+                # (two ghost layers on a level halve them; which levels have two depends on P).
+                per_cycle = 1.0
+                if count and count.get("exchanges_per_cycle") and two["poisson"].get("exchanges_per_cycle"):
+                    per_cycle = count["exchanges_per_cycle"] / two["poisson"]["exchanges_per_cycle"]
+                halo = sum(msgs[k] * (ratio * per_cycle if k == "multigrid" else 1.0) * per_exchange[k]
+                           for k in ("field", "multigrid"))
+                if count and count.get("coarsest_cells") and "latency_s" in net:
+                    # The coarsest level's LU on every rank: one all-gather of its right-hand side a cycle.
+                    gather = math.ceil(math.log2(p)) * net["latency_s"] + 8.0 * count["coarsest_cells"] / net["bandwidth_bytes_per_s"]
+                    reductions += (iters * ratio + 1) * gather
+                if count:
+                    reductions += iters * ratio * 2 * count.get("gathered_levels", 0) * lat
+            swaps = sum(2 * message_time(net, 72.0 * max(load["recv"][r][2 * d + s] for r in range(p) for s in range(2)), line)
                         for d in face)
             dem = L * (math.ceil(math.log2(p)) * red + swaps) + 6 * swaps
             exchange = steps * (halo + reductions + dem)
+            parts = {"halo": steps * halo, "reductions": steps * reductions, "dem": steps * dem}
         rows.append({"ranks": p, "grid": dims, "compute": compute, "exchange": exchange, "stages": stages,
+                     "exchange_parts": parts if p > 1 else {},
                      "predicted": compute + exchange, "measured": median_loop(runs, p), "iteration_ratio": ratio,
                      "exchanges_per_cycle_ratio": per_cycle if p > 1 else 1.0,
                      "iterations_from": None if count is None else count.get("process_grid")})
@@ -710,6 +777,9 @@ def main():
                    "case, bodies, --set and rank counts) instead of counting again (for a coupled case, minutes)")
     p.add_argument("--cuts", choices=["equal", "balanced"], default="equal",
                    help="DEM scenes: the cut planes the runs used (domain.cuts from `tessera balance`: balanced)")
+    p.add_argument("--message-cost", choices=["sizes", "line"], default="sizes",
+                   help="coupled cases: each message priced between network.json's measured sizes (default), or by "
+                        "the latency-bandwidth line fitted over them all (the model until 2026-12-05)")
     p.add_argument("--ranks", type=lambda s: [int(x) for x in s.split(",")], required=True)
     p.add_argument("--set", action="append", default=[])
     p.add_argument("--out", default="runs/scaling")

@@ -16,6 +16,8 @@
 #include "core/decomposition.hpp"
 #include "core/errors.hpp"
 #include "core/h5_file.hpp"
+#include "fluid/flow_solver.hpp"
+#include "fluid/multigrid_plan.hpp"
 #include "solid/rank_load.hpp"
 #include "solid/rigid_rotation.hpp"
 #include "solid/shape.hpp"
@@ -105,9 +107,11 @@ int balance_report(const BalanceRequest& rq) {
   }
   Vec3 spacing{};
   std::array<int, 3> cells{0, 0, 0};
+  FlowSettings flow;  // the pressure's multigrid settings and the periodic directions
   if (const auto fluid = root.optional_section("fluid")) {
     const auto n = fluid->integers("cells", 3, 1, 1 << 24);
     for (int d = 0; d < 3; ++d) cells[d] = static_cast<int>(n[d]), spacing[d] = (hi[d] - lo[d]) / static_cast<double>(n[d]);
+    flow = FlowSettings::from_config(*fluid);
   }
   // A coupled run balances its flow cells (balance.cell_weight each) with its bodies' work times
   // the DEM sub-steps of a flow step (FlowScene::rank_work): the sub-steps come from the case.
@@ -214,6 +218,48 @@ int balance_report(const BalanceRequest& rq) {
         for (int i = 0; i < dims[0]; ++i) w.push_back(per_slab[0][i] * per_slab[1][j] * per_slab[2][k] * cell_weight);
     return w;
   };
+  // The pressure multigrid's levels on the cuts' blocks (fluid/multigrid_plan.hpp): per level its
+  // cells, process grid, ghost layers, whether it was gathered, the ghost exchanges a V-cycle makes
+  // on it (the operator's one on the finest), and along each split direction the largest face of a
+  // block (its cells; 0 where the direction is not split) and the largest part a gathered level's
+  // owner receives (cells) and how many parts an owner holds: what the scaling model prices per
+  // message.
+  auto multigrid_json = [&](std::array<int, 3> dims, const CutPlanes& interior) {
+    const auto per_slab = cell_slabs(dims, interior);
+    std::array<std::vector<int>, 3> blocks;
+    std::array<bool, 3> periodic{};
+    for (int d = 0; d < 3; ++d) {
+      for (const double c : per_slab[d]) blocks[d].push_back(static_cast<int>(c));
+      periodic[d] = flow.boundaries[d][0] == BoundaryKind::periodic;
+    }
+    const auto& ps = flow.poisson;
+    const auto plan = plan_multigrid(blocks, periodic, 2);
+    const auto exchanges = multigrid_exchanges(plan, ps.pre_sweeps, ps.post_sweeps, ps.coarse_sweeps, ps.coarse_direct);
+    nlohmann::json levels = nlohmann::json::array();
+    for (std::size_t l = 0; l < plan.size(); ++l) {
+      const MultigridLevelPlan& L = plan[l];
+      const auto procs = L.procs();
+      std::array<long, 3> face{};
+      for (int d = 0; d < 3; ++d) {
+        if (procs[d] < 2 && !periodic[d]) continue;
+        const auto& a = L.blocks[(d + 1) % 3];
+        const auto& b = L.blocks[(d + 2) % 3];
+        face[d] = long(*std::max_element(a.begin(), a.end())) * long(*std::max_element(b.begin(), b.end()));
+      }
+      long largest_part = 0, parts_per_owner = 0;
+      if (L.gathered()) {
+        largest_part = parts_per_owner = 1;
+        for (int d = 0; d < 3; ++d) {
+          largest_part *= *std::max_element(L.parts[d].begin(), L.parts[d].end());
+          parts_per_owner *= L.merged[d] ? 2 : 1;
+        }
+      }
+      levels.push_back({{"cells", L.n}, {"procs", procs}, {"layers", L.layers}, {"halo", L.halo},
+                        {"gathered", L.gathered()}, {"exchanges_per_cycle", exchanges[l]}, {"face_cells", face},
+                        {"part_cells", largest_part}, {"parts_per_owner", parts_per_owner}});
+    }
+    return levels;
+  };
   auto plus = [](std::vector<double> a, const std::vector<double>& b) {
     for (std::size_t r = 0; r < a.size(); ++r) a[r] += b[r];
     return a;
@@ -310,6 +356,8 @@ int balance_report(const BalanceRequest& rq) {
       table.back()["cell_work_balanced"] = balanced_cells;
       table.back()["cell_slabs_equal"] = cell_slabs(dims, equal_cuts(lo, hi, dims));
       table.back()["cell_slabs_balanced"] = cell_slabs(dims, cuts);
+      table.back()["multigrid_equal"] = multigrid_json(dims, equal_cuts(lo, hi, dims));
+      table.back()["multigrid_balanced"] = multigrid_json(dims, cuts);
     }
   }
   if (!rq.json_out.empty()) {

@@ -31,7 +31,8 @@
 // hand their aggregates to the first of the pair, which owns both parts from there down (the
 // others wait for its correction), so every direction coarsens on as on one rank (theory F9a).
 // Coarsening stops where no direction can be coarsened or below 256 cells; the coarsest level is
-// solved exactly (or by 20 sweeps).
+// solved exactly (or by 20 sweeps). The levels' sizes, blocks, gathers and ghost layers come from
+// fluid/multigrid_plan.hpp, which lays them out from the finest level's cuts alone.
 #pragma once
 #include <petscdmda.h>
 #include <petscksp.h>
