@@ -23,8 +23,9 @@ each run's summary.json into speed-up, parallel efficiency and the time per phas
         prints the model's error. The blast (its levelled step), a DEM scene of spheres or discs
         whose bodies --bodies gives (the run's starting checkpoint), or a coupled case (its bed as
         --bodies; D also needs a 2-rank run, whose halo traffic per flow step the model scales;
-        coupled_model below). --message-cost line: the coupled model's messages priced by the
-        fitted line instead of between the measured sizes.
+        coupled_model below). --message-cost line: the point-to-point messages priced by the
+        fitted line instead of between the measured sizes (the DEM, blast and coupled models' figures
+        before 2026-12-05 were made so).
 
 The blast's model (stability levels): every sub-step takes its busiest rank's work and ends in the
 halo's exchange: each rank sends each neighbour the states of its due elements that the neighbour's
@@ -80,7 +81,8 @@ def message_time(net, nbytes, line=False):
     latency-bandwidth line fitted over all sizes. The line's latency comes from the large messages'
     residuals: on this host 3.0-3.6 us against about 1 us measured up to 1 kB, and 4 us against
     7-9 us measured at 8-16 kB (docs/performance.md)."""
-    lat, bw = net["sendrecv_latency_s"], net["sendrecv_bandwidth_bytes_per_s"]
+    lat = net.get("sendrecv_latency_s", net.get("latency_s"))
+    bw = net.get("sendrecv_bandwidth_bytes_per_s", net.get("bandwidth_bytes_per_s"))
     samples = net.get("sendrecv_samples")
     if line or not samples:
         return lat + nbytes / bw
@@ -479,7 +481,8 @@ def blast_model(a, b, runs, net):
             # 14 doubles an element; every rank waits for the slowest. The messages to all neighbours
             # are in flight together (MPI_Isend/Irecv): one latency, then the busiest rank's bytes (a
             # lower bound: per-message overheads not counted).
-            halo = sum(c(f) * (sr_lat + 112.0 * max(sent) / sr_bw) for f, sent in enumerate(part["level_halo_sent"]))
+            halo = sum(c(f) * message_time(net, 112.0 * max(sent), a.message_cost == "line")
+                       for f, sent in enumerate(part["level_halo_sent"]))
             exchange = steps * (gather + halo)
         rows.append({"ranks": p, "compute": compute, "exchange": exchange, "predicted": compute + exchange,
                      "measured": median_loop(runs, p)})
@@ -534,7 +537,7 @@ def dem_model(a, b, runs, net):
                 if dims[d] > 1:
                     for side in range(2):
                         most = max(load["recv"][r][2 * d + side] for r in range(p))
-                        per_step += lat + 72.0 * most / bw  # x, v, omega per ghost
+                        per_step += message_time(net, 72.0 * most, a.message_cost == "line")  # x, v, omega a ghost
             exchange = steps * per_step
         rows.append({"ranks": p, "grid": dims, "compute": compute, "exchange": exchange,
                      "predicted": compute + exchange, "measured": median_loop(runs, p),
@@ -631,7 +634,7 @@ def coupled_model(a, b, runs, net):
     per_face = {k: max(pr[k + "_halo_bytes"]) / max(1, max(pr[k + "_halo_messages"])) / face2
                 for k in ("field", "multigrid")}
     iters = one["poisson"]["iterations_per_step"]
-    lat, bw, red = net["sendrecv_latency_s"], net["sendrecv_bandwidth_bytes_per_s"], net["allreduce_s"]
+    lat, red = net["sendrecv_latency_s"], net["allreduce_s"]
     if "message_overhead_s" not in net:
         print("scaling model: network.json predates the messages-in-flight measurement; each further message "
               "of an exchange counted as free (run `network` again)")
@@ -778,8 +781,8 @@ def main():
     p.add_argument("--cuts", choices=["equal", "balanced"], default="equal",
                    help="DEM scenes: the cut planes the runs used (domain.cuts from `tessera balance`: balanced)")
     p.add_argument("--message-cost", choices=["sizes", "line"], default="sizes",
-                   help="coupled cases: each message priced between network.json's measured sizes (default), or by "
-                        "the latency-bandwidth line fitted over them all (the model until 2026-12-05)")
+                   help="each point-to-point message priced between network.json's measured sizes (default), or by "
+                        "the latency-bandwidth line fitted over them all (the models until 2026-12-05)")
     p.add_argument("--ranks", type=lambda s: [int(x) for x in s.split(",")], required=True)
     p.add_argument("--set", action="append", default=[])
     p.add_argument("--out", default="runs/scaling")
