@@ -107,11 +107,14 @@ int balance_report(const BalanceRequest& rq) {
   }
   Vec3 spacing{};
   std::array<int, 3> cells{0, 0, 0};
-  FlowSettings flow;  // the pressure's multigrid settings and the periodic directions
+  // The pressure multigrid's settings and the periodic directions: its levels' plan.
+  std::array<std::array<BoundaryKind, 2>, 3> boundaries{};
+  PoissonSettings poisson;
   if (const auto fluid = root.optional_section("fluid")) {
     const auto n = fluid->integers("cells", 3, 1, 1 << 24);
     for (int d = 0; d < 3; ++d) cells[d] = static_cast<int>(n[d]), spacing[d] = (hi[d] - lo[d]) / static_cast<double>(n[d]);
-    flow = FlowSettings::from_config(*fluid);
+    boundaries = FlowSettings::boundaries_from_config(*fluid);
+    poisson = FlowSettings::poisson_from_config(*fluid);
   }
   // A coupled run balances its flow cells (balance.cell_weight each) with its bodies' work times
   // the DEM sub-steps of a flow step (FlowScene::rank_work): the sub-steps come from the case.
@@ -230,9 +233,9 @@ int balance_report(const BalanceRequest& rq) {
     std::array<bool, 3> periodic{};
     for (int d = 0; d < 3; ++d) {
       for (const double c : per_slab[d]) blocks[d].push_back(static_cast<int>(c));
-      periodic[d] = flow.boundaries[d][0] == BoundaryKind::periodic;
+      periodic[d] = boundaries[d][0] == BoundaryKind::periodic;
     }
-    const auto& ps = flow.poisson;
+    const auto& ps = poisson;
     const auto plan = plan_multigrid(blocks, periodic, 2);
     const auto exchanges = multigrid_exchanges(plan, ps.pre_sweeps, ps.post_sweeps, ps.coarse_sweeps, ps.coarse_direct);
     nlohmann::json levels = nlohmann::json::array();

@@ -26,14 +26,7 @@ FlowSettings FlowSettings::from_config(const ConfigNode& fluid) {
   s.gas = {gas.real("density", Dim::density, Range::positive()),
            gas.real("viscosity", Dim::viscosity, Range::non_negative())};
   s.gravity = fluid.vec3("gravity", Dim::acceleration, Vec3{0, 0, -9.81});
-  if (const auto b = fluid.optional_section("boundaries")) {
-    const char* names[3][2] = {{"x_low", "x_high"}, {"y_low", "y_high"}, {"z_low", "z_high"}};
-    for (int d = 0; d < 3; ++d) {
-      for (int side = 0; side < 2; ++side) s.boundaries[d][side] = boundary_kind(*b, names[d][side]);
-      if ((s.boundaries[d][0] == BoundaryKind::periodic) != (s.boundaries[d][1] == BoundaryKind::periodic))
-        b->fail(names[d][1], std::string("periodic on both sides of ") + "xyz"[d] + " or on neither");
-    }
-  }
+  s.boundaries = boundaries_from_config(fluid);
   s.wall_model = fluid.choice("wall_model", {"laminar", "spalding"}, "laminar") == "spalding"
                      ? FlowSettings::WallModel::spalding
                      : FlowSettings::WallModel::laminar;
@@ -45,19 +38,38 @@ FlowSettings FlowSettings::from_config(const ConfigNode& fluid) {
     s.dt_min = t->real("min", Dim::time, Range::positive(), s.dt_min);
     s.dt_growth = t->real("growth", Dim::none, Range{1.0, 10.0, false, false}, s.dt_growth);
   }
+  s.poisson = poisson_from_config(fluid);
+  return s;
+}
+
+std::array<std::array<BoundaryKind, 2>, 3> FlowSettings::boundaries_from_config(const ConfigNode& fluid) {
+  std::array<std::array<BoundaryKind, 2>, 3> kinds{};  // no-slip everywhere unless given
+  if (const auto b = fluid.optional_section("boundaries")) {
+    const char* names[3][2] = {{"x_low", "x_high"}, {"y_low", "y_high"}, {"z_low", "z_high"}};
+    for (int d = 0; d < 3; ++d) {
+      for (int side = 0; side < 2; ++side) kinds[d][side] = boundary_kind(*b, names[d][side]);
+      if ((kinds[d][0] == BoundaryKind::periodic) != (kinds[d][1] == BoundaryKind::periodic))
+        b->fail(names[d][1], std::string("periodic on both sides of ") + "xyz"[d] + " or on neither");
+    }
+  }
+  return kinds;
+}
+
+PoissonSettings FlowSettings::poisson_from_config(const ConfigNode& fluid) {
+  PoissonSettings s;
   if (const auto p = fluid.optional_section("poisson")) {
-    s.poisson.rtol = p->real("rtol", Dim::none, Range{0.0, 1.0, true, true}, s.poisson.rtol);
-    s.poisson.atol = p->real("atol", Dim::none, Range::non_negative(), s.poisson.atol);
-    s.poisson.max_iterations = int(p->integer("max_iterations", 1, 100000, s.poisson.max_iterations));
-    s.poisson.reuse_preconditioner = int(p->integer("reuse_preconditioner", 1, 100000, s.poisson.reuse_preconditioner));
-    s.poisson.petsc_options = p->text("petsc_options", "");
-    s.poisson.geometric_multigrid = p->choice("preconditioner", {"multigrid", "petsc"}, "multigrid") == "multigrid";
+    s.rtol = p->real("rtol", Dim::none, Range{0.0, 1.0, true, true}, s.rtol);
+    s.atol = p->real("atol", Dim::none, Range::non_negative(), s.atol);
+    s.max_iterations = int(p->integer("max_iterations", 1, 100000, s.max_iterations));
+    s.reuse_preconditioner = int(p->integer("reuse_preconditioner", 1, 100000, s.reuse_preconditioner));
+    s.petsc_options = p->text("petsc_options", "");
+    s.geometric_multigrid = p->choice("preconditioner", {"multigrid", "petsc"}, "multigrid") == "multigrid";
     if (const auto mg = p->optional_section("multigrid")) {
-      s.poisson.pre_sweeps = int(mg->integer("pre_sweeps", 1, 20, s.poisson.pre_sweeps));
-      s.poisson.post_sweeps = int(mg->integer("post_sweeps", 1, 20, s.poisson.post_sweeps));
-      s.poisson.coarse_sweeps = int(mg->integer("coarse_sweeps", 2, 1000, s.poisson.coarse_sweeps));
-      s.poisson.coarse_direct = mg->choice("coarse_solver", {"direct", "sweeps"}, "direct") == "direct";
-      if (s.poisson.pre_sweeps != s.poisson.post_sweeps)
+      s.pre_sweeps = int(mg->integer("pre_sweeps", 1, 20, s.pre_sweeps));
+      s.post_sweeps = int(mg->integer("post_sweeps", 1, 20, s.post_sweeps));
+      s.coarse_sweeps = int(mg->integer("coarse_sweeps", 2, 1000, s.coarse_sweeps));
+      s.coarse_direct = mg->choice("coarse_solver", {"direct", "sweeps"}, "direct") == "direct";
+      if (s.pre_sweeps != s.post_sweeps)
         mg->fail("post_sweeps", "equal to pre_sweeps (CG needs a symmetric preconditioner)");
     }
   }

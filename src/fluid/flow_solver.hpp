@@ -79,6 +79,10 @@ struct FlowSettings {
 
   // From the case's `fluid` section (every key checked; errors name the key).
   static FlowSettings from_config(const ConfigNode& fluid);
+  // Its parts that lay out the pressure's multigrid (`tessera balance` reads these alone): the
+  // boundaries (`boundaries`) and the Poisson solver (`poisson`).
+  static std::array<std::array<BoundaryKind, 2>, 3> boundaries_from_config(const ConfigNode& fluid);
+  static PoissonSettings poisson_from_config(const ConfigNode& fluid);
 };
 
 struct FlowStepStats {
