@@ -121,19 +121,19 @@ void NeighborList::bin(const ContactElements& p, double skin) {
   moved_list_.clear();
 }
 
+inline void NeighborList::push_if_near(const ContactElements& p, std::int32_t a, std::int32_t b, const double* xa,
+                                       const double* xb, double cut) {
+  const double dx = xa[0] - xb[0], dy = xa[1] - xb[1], dz = xa[2] - xb[2];
+  if (dx * dx + dy * dy + dz * dz >= cut * cut) return;
+  const bool a_low = p.key[a] < p.key[b];
+  candidates_.push_back({pair_key(p.key[a], p.key[b]), a_low ? a : b, a_low ? b : a});
+}
+
 inline void NeighborList::consider(const ContactElements& p, double skin, std::size_t a, std::size_t b, double extra) {
   if (a >= p.owned && b >= p.owned) return;
   if (p.body && p.body[a] == p.body[b]) return;
-  double r2 = 0;
-  for (int d = 0; d < 3; ++d) {
-    const double dx = p.x[p.stride * a + d] - p.x[p.stride * b + d];
-    r2 += dx * dx;
-  }
-  const double cut = p.radius[a] + p.radius[b] + skin + extra;
-  if (r2 >= cut * cut) return;
-  const bool a_low = p.key[a] < p.key[b];
-  candidates_.push_back({pair_key(p.key[a], p.key[b]), static_cast<std::int32_t>(a_low ? a : b),
-                         static_cast<std::int32_t>(a_low ? b : a)});
+  push_if_near(p, static_cast<std::int32_t>(a), static_cast<std::int32_t>(b), p.x + p.stride * a, p.x + p.stride * b,
+               p.radius[a] + p.radius[b] + skin + extra);
 }
 
 void NeighborList::build(const ContactElements& p, double skin, const HistoryMap& extra) {
@@ -172,8 +172,8 @@ void NeighborList::list_all(const ContactElements& p, double skin, const History
     for (int k = cell_start_[c + 1] - 1; k >= cell_start_[c]; --k)
       run_end_[k] = k + 1 < cell_start_[c + 1] && packed_body_[k + 1] == packed_body_[k] ? run_end_[k + 1] : k + 1;
   const auto owned = static_cast<std::int32_t>(p.owned);
-  // consider()'s test on the packed copies, the same arithmetic in the same order (a = cell_items_[u]),
-  // for the elements [v, end) of one cell that are not u's body's.
+  // consider()'s test on the packed copies (a = cell_items_[u]), for the elements [v, end) of one
+  // cell that are not u's body's: a body's run skipped at once, the same reach test.
   auto consider_binned = [&](int u, int v, int end) {
     const std::int32_t a = cell_items_[u], body_u = packed_body_[u];
     const auto& xa = packed_[u];
@@ -186,12 +186,7 @@ void NeighborList::list_all(const ContactElements& p, double skin, const History
       const std::int32_t b = cell_items_[v];
       const auto& xb = packed_[v++];
       if (a >= owned && b >= owned) continue;
-      const double dx = xa[0] - xb[0], dy = xa[1] - xb[1], dz = xa[2] - xb[2];
-      const double r2 = dx * dx + dy * dy + dz * dz;
-      const double cut = xa[3] + xb[3] + skin;
-      if (r2 >= cut * cut) continue;
-      const bool a_low = p.key[a] < p.key[b];
-      candidates_.push_back({pair_key(p.key[a], p.key[b]), a_low ? a : b, a_low ? b : a});
+      push_if_near(p, a, b, xa.data(), xb.data(), xa[3] + xb[3] + skin);
     }
   };
 

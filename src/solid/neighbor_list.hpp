@@ -106,6 +106,10 @@ class NeighborList {
   int cell_coord(double x, int d) const;
   // Appends (a, b) to candidates_ when it may be listed: not two ghosts, not one body, within reach.
   void consider(const ContactElements& e, double skin, std::size_t a, std::size_t b, double extra = 0.0);
+  // The reach test both searches share (consider(), and the whole listing's on cell-ordered copies):
+  // places xa, xb closer than cut, then the pair in key order.
+  void push_if_near(const ContactElements& e, std::int32_t a, std::int32_t b, const double* xa, const double* xb,
+                    double cut);
   void merge_relisted(const ContactElements& e);
   void list_all(const ContactElements& e, double skin, const HistoryMap& extra);  // build() less its count
   // Elements listed again since the last bin() (relist): they are not looked up in the cells, where
