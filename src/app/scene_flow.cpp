@@ -351,17 +351,20 @@ void FlowScene::begin_output(const RunOptions& opt) {
     if (root && !deprecated_.empty()) std::printf("  warning: %s\n", deprecated_.c_str());
     if (root) std::fflush(stdout);
   }
+  const bool budget = flow_->settings().energy_budget;
   if (root) {
     const bool append = opt.restart.has_value() && fs::exists(opt.output_dir + "/series.csv");
     series_.open(opt.output_dir + "/series.csv", append ? std::ios::app : std::ios::trunc);
     if (!append)
       series_ << "time,dt,dt_limit,poisson_iterations,poisson_residual,liquid_volume,kinetic_energy,max_speed,"
                  "front_position"
-              << (bodies_ ? bodies_->series_header() : "") << "\n";
+              << (bodies_ ? bodies_->series_header() : "")
+              << (budget ? ",potential_energy,energy_advection,energy_viscous,energy_projection" : "") << "\n";
     series_.precision(10);
   }
   fields_ = std::make_unique<FieldSeries>(opt.output_dir + "/fields");
   if (bodies_) bodies_->add_fields(*fields_);
+  if (budget) fields_->add_field("advection_energy_source", &flow_->advection_energy_source());
   if (snapshot_interval_ > 0) {
     resuming_ = opt.restart.has_value();  // the crater at this time is the stopped run's last row
     write_snapshot();
@@ -478,10 +481,16 @@ void FlowScene::balance_if_due(const RunOptions& opt) {
 // restart. The file, DIR/repartition.h5, is removed after.
 void FlowScene::repartition(const CutPlanes& cuts, const RunOptions& opt) {
   const std::string path = opt.output_dir + "/repartition.h5";
-  write_flow_checkpoint(path, *flow_, bodies_ ? bodies_->checkpoint_fields() : std::vector<NamedCellField>{});
+  std::vector<NamedCellField> extra = bodies_ ? bodies_->checkpoint_fields() : std::vector<NamedCellField>{};
+  const bool budget = flow_->settings().energy_budget;  // its per-cell source moves with the cuts
+  if (budget) extra.emplace_back("advection_energy_source", &flow_->advection_energy_source());
+  write_flow_checkpoint(path, *flow_, extra);
   decomp_->set_cuts(cuts);
   flow_->repartition(*decomp_);
   read_flow_checkpoint(path, *flow_);
+  if (budget)
+    read_checkpoint_cell_field(path, flow_->grid(), "advection_energy_source", flow_->mutable_advection_energy_source(),
+                               "the energy budget's advection source");
   if (bodies_) {
     bodies_->repartition(path);
     bodies_->add_fields(*fields_);
@@ -505,6 +514,14 @@ bool FlowScene::after_step(const RunOptions& opt) {
     const double volume = liquid_volume(), ke = flow_->kinetic_energy(), front = front_position();
     std::string bodies;
     if (bodies_) bodies = bodies_->series_row();
+    if (flow_->settings().energy_budget) {
+      const double potential = flow_->potential_energy();
+      const auto& b = flow_->energy_budget();
+      std::ostringstream row;
+      row.precision(10);
+      row << ',' << potential << ',' << b.advection << ',' << b.viscous << ',' << b.projection;
+      bodies += row.str();
+    }
     if (flow_->grid().rank() == 0)
       series_ << flow_->time() << ',' << last_.dt << ',' << last_limit_ << ',' << last_.poisson.iterations << ','
               << last_.poisson.residual << ',' << volume << ',' << ke << ',' << vmax << ',' << front << bodies
@@ -537,6 +554,11 @@ void FlowScene::summarise(nlohmann::json& s) {
   q["liquid_volume"] = volume;
   q["liquid_volume_drift"] = volume0_ > 0 ? (volume - volume0_) / volume0_ : 0.0;
   q["kinetic_energy"] = flow_->kinetic_energy();
+  if (flow_->settings().energy_budget) {
+    const auto& b = flow_->energy_budget();
+    q["potential_energy"] = flow_->potential_energy();
+    q["energy_budget"] = {{"advection", b.advection}, {"viscous", b.viscous}, {"projection", b.projection}};
+  }
   q["max_speed"] = flow_->max_speed();
   q["peak_speed"] = peak_speed_;
   q["min_liquid_fraction"] = flow_->min_fraction();

@@ -99,11 +99,36 @@ void FlowSolver::sweep(int d, double dt, bool last) {
     const std::size_t c = g.at(n[0], n[1], n[2]);
     store_update(c, sweep_update(c, st, sweep_dilatation(c, d, dt, last)));
   }
+  if (!advection_source_.empty()) add_advection_source(d);
   for (int q = 0; q < 3; ++q) std::swap(u_[q], sweep_u_[q]);
   std::swap(f_, sweep_f_);
   g.exchange({&f_, &u_[0], &u_[1], &u_[2]});
   fill_fraction_ghosts(f_);
   fill_velocity_ghosts(u_);
+}
+
+void FlowSolver::add_advection_source(int d) {
+  // F12a: a face with mass flux M carrying q between cells a (low) and b (high) makes the kinetic
+  // energy M (u_b - u_a) (q - (u_a + u_b) / 2) per cell volume: 0 for the mean, -M (u_b - u_a)^2 / 2
+  // for the upwind value. Half to each of its owned cells (a face on a cut is computed by both
+  // ranks, each keeping its own cell's half).
+  const FluidGrid& g = *grid_;
+  const std::ptrdiff_t st = g.stride(d);
+  std::array<int, 3> lo{g.begin(0), g.begin(1), g.begin(2)}, hi{g.end(0), g.end(1), g.end(2)};
+  hi[d] += 1;
+  for_box(lo, hi, [&](int i, int j, int k) {
+    const std::size_t c = g.at(i, j, k);
+    const double m = flux_m_[c];
+    if (m == 0) return;
+    double s = 0;
+    for (int q = 0; q < 3; ++q) {
+      const double a = u_[q][c - st], b = u_[q][c];
+      s += (b - a) * (flux_q_[q][c] - 0.5 * m * (a + b));
+    }
+    const int idx = d == 0 ? i : (d == 1 ? j : k);
+    if (idx < g.end(d)) advection_source_[c] += 0.5 * s;
+    if (idx > g.begin(d)) advection_source_[c - st] += 0.5 * s;
+  });
 }
 
 double FlowSolver::sweep_dilatation(std::size_t c, int d, double dt, bool last) const {

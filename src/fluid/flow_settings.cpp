@@ -30,6 +30,7 @@ FlowSettings FlowSettings::from_config(const ConfigNode& fluid) {
   s.wall_model = fluid.choice("wall_model", {"laminar", "spalding"}, "laminar") == "spalding"
                      ? FlowSettings::WallModel::spalding
                      : FlowSettings::WallModel::laminar;
+  s.energy_budget = fluid.flag("energy_budget", false);
   if (const auto t = fluid.optional_section("time_step")) {
     s.cfl = t->real("cfl", Dim::none, Range{0.0, 0.5, true, false}, s.cfl);
     s.viscous_number = t->real("viscous_number", Dim::none, Range{0.0, 1.0, true, false}, s.viscous_number);

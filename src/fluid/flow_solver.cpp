@@ -61,6 +61,7 @@ void FlowSolver::make_fields() {
     flux_q_[d] = g.make_field();
   }
   for (auto& a : plic_) a = g.make_field();
+  if (settings_.energy_budget) advection_source_ = g.make_field();
 }
 
 FlowSolver::~FlowSolver() = default;
@@ -238,15 +239,31 @@ FlowStepStats FlowSolver::advance(double dt) {
   if (keep)
     for (int q = 0; q < 3; ++q)
       for (std::size_t c = 0; c < rho_.size(); ++c) advection_change_[q][c] = rho_[c] * u_[q][c];
+  // F12a's budget: the energy before and after each stage (only the advection moves mass, so only
+  // it changes the potential energy).
+  const bool budget = settings_.energy_budget;
+  double kinetic = budget ? kinetic_energy() : 0.0;
+  const double potential = budget ? potential_energy() : 0.0;
   advect(dt);
+  if (budget) {
+    const double k = kinetic_energy();
+    energy_budget_.advection += (k - kinetic) + (potential_energy() - potential);
+    kinetic = k;
+  }
   if (keep)
     for (int q = 0; q < 3; ++q)
       for (std::size_t c = 0; c < rho_.size(); ++c) advection_change_[q][c] = rho_[c] * u_[q][c] - advection_change_[q][c];
   if (settings_.liquid.viscosity > 0 || settings_.gas.viscosity > 0) {
     auto t = timers_.scope("viscous");
     viscous(dt);
+    if (budget) {
+      const double k = kinetic_energy();
+      energy_budget_.viscous += k - kinetic;
+      kinetic = k;
+    }
   }
   st.poisson = project(dt, true);
+  if (budget) energy_budget_.projection += kinetic_energy() - kinetic;
   time_ += dt;
   ++steps_;
   last_dt_ = dt;
@@ -445,6 +462,14 @@ double FlowSolver::kinetic_energy() const {
     const std::size_t c = g.at(i, j, k);
     e += 0.5 * rho_[c] * (u_[0][c] * u_[0][c] + u_[1][c] * u_[1][c] + u_[2][c] * u_[2][c]);
   });
+  return g.reduce_sum(e) * g.cell_volume();
+}
+
+double FlowSolver::potential_energy() const {
+  const FluidGrid& g = *grid_;
+  double e = 0;
+  for_box({g.begin(0), g.begin(1), g.begin(2)}, {g.end(0), g.end(1), g.end(2)},
+          [&](int i, int j, int k) { e -= rho_[g.at(i, j, k)] * potential(i + 0.5, j + 0.5, k + 0.5); });
   return g.reduce_sum(e) * g.cell_volume();
 }
 

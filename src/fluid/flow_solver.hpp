@@ -75,6 +75,10 @@ struct FlowSettings {
   // the laminar one for y+ below about 3, and is applied implicitly (theory F9b).
   enum class WallModel { laminar, spalding };
   WallModel wall_model = WallModel::laminar;
+  // `fluid.energy_budget: true`: each step also measures the energy every stage changes (F12a):
+  // FlowSolver::energy_budget() and the per-cell `advection_energy_source`. Off by default (two
+  // extra reductions and field passes a stage).
+  bool energy_budget = false;
   PoissonSettings poisson;
 
   // From the case's `fluid` section (every key checked; errors name the key).
@@ -134,6 +138,7 @@ class FlowSolver {
   // Collective diagnostics over owned cells.
   double liquid_volume() const;
   double kinetic_energy() const;
+  double potential_energy() const;  // sum of -rho g . (x - lo) over the cells (J; both phases)
   double max_speed() const;
   double max_face_divergence() const;  // max |div u_f| (1/s)
   // Collective: the volume flux out of the domain through side `side` (0 low, 1 high) of direction
@@ -147,6 +152,21 @@ class FlowSolver {
   Vec3 last_wall_impulse() const;
   double min_fraction() const;
   double max_fraction() const;
+
+  // With settings.energy_budget: the kinetic + potential energy (both phases) that each stage has
+  // changed since the start or restart (J, summed over steps; theory F12a). The advection moves
+  // mass (potential) and momentum (kinetic); the viscous stage and the projection change the
+  // kinetic energy, the projection by gravity's work and the pressure's. Their sum is the whole
+  // energy's change; without surface tension the exact flow loses only the viscous dissipation and
+  // what leaves through open sides.
+  struct EnergyBudget {
+    double advection = 0, viscous = 0, projection = 0;
+  };
+  const EnergyBudget& energy_budget() const { return energy_budget_; }
+  // With settings.energy_budget: per owned cell, the kinetic energy its faces' momentum fluxes made
+  // in the advection since the start (J/m^3, half of each face's share to each of its two cells; F12a).
+  const std::vector<double>& advection_energy_source() const { return advection_source_; }
+  std::vector<double>& mutable_advection_energy_source() { return advection_source_; }
 
   // Fields (ghosted local arrays, see FluidGrid): volume fraction, cell velocity components,
   // pressure, face-normal velocities, density, viscosity.
@@ -256,6 +276,9 @@ class FlowSolver {
   double g2_ = 0, h_max_ = 0;
   int down_axis_ = 2;  // gravity's main direction  // rho (1 + lambda dt): the projection's, with a cell drag
   std::array<std::vector<double>, 3> flux_q_;
+  EnergyBudget energy_budget_;
+  std::vector<double> advection_source_;  // F12a's per-cell source, when the budget is on
+  void add_advection_source(int d);  // a sweep's face sources into advection_source_
   std::array<ExactSum, 3> wall_impulse_;  // this rank's wall faces, the current step
   PhaseTimers timers_;
   double time_ = 0;

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <mpi.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -86,6 +87,57 @@ TEST(RunOutputs, SummaryAndXdmfSnapshotsAreComplete) {
   EXPECT_TRUE(fs::exists(out / "bed.data"));
 
   check_xdmf(out / "snapshots", "particles.xmf", 7);
+}
+
+// fluid.energy_budget (theory F12a): series.csv gets potential_energy and the three stages' sums,
+// summary.json quantities.energy_budget, the snapshots advection_energy_source (in the XDMF). The
+// stages account for the whole energy: between any two rows of the series, kinetic + potential
+// changes by the change of the three sums (bound 1e-9 of the energies: the rows' 10 digits).
+TEST(RunOutputs, FlowEnergyBudgetInSeriesSummaryAndFields) {
+  if (!rank0()) return;
+  const fs::path out = fs::temp_directory_path() / "tessera_energy_budget";
+  fs::remove_all(out);
+  const auto r = run_shell(std::string(TESSERA_BIN) + " run " + TESSERA_SOURCE_DIR +
+                           "/cases/drop_impact/pool_bench.yaml --quiet --set fluid.cells=[16,16,16] --set run.end_time=1e-3"
+                           " --set fluid.energy_budget=true --set output.series_interval=1e-4"
+                           " --set output.snapshot_interval=5e-4 --output " + out.string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::ifstream in(out / "summary.json");
+  const auto s = nlohmann::json::parse(in);
+  ASSERT_TRUE(s["quantities"].contains("energy_budget"));
+  for (const char* stage : {"advection", "viscous", "projection"})
+    EXPECT_TRUE(s["quantities"]["energy_budget"].contains(stage)) << stage;
+  std::ifstream csv(out / "series.csv");
+  std::string line;
+  std::getline(csv, line);
+  std::vector<std::string> names;
+  for (std::stringstream h(line); std::getline(h, line, ',');) names.push_back(line);
+  auto column = [&](const std::string& name) {
+    const auto it = std::find(names.begin(), names.end(), name);
+    EXPECT_NE(it, names.end()) << name;
+    return int(it - names.begin());
+  };
+  const int ke = column("kinetic_energy"), pe = column("potential_energy"), adv = column("energy_advection"),
+            vis = column("energy_viscous"), pro = column("energy_projection");
+  std::vector<std::vector<double>> rows;
+  while (std::getline(csv, line)) {
+    std::vector<double> row;
+    std::stringstream l(line);
+    for (std::string v; std::getline(l, v, ',');) row.push_back(std::atof(v.c_str()));
+    rows.push_back(row);
+  }
+  ASSERT_GE(rows.size(), 5u);
+  const auto& a = rows.front();
+  const auto& b = rows.back();
+  const double whole = (b[ke] + b[pe]) - (a[ke] + a[pe]);
+  const double stages = (b[adv] + b[vis] + b[pro]) - (a[adv] + a[vis] + a[pro]);
+  EXPECT_LT(b[adv] - a[adv], 0.0);  // the pool drop loses energy to the advection (docs/performance.md)
+  EXPECT_LT(std::abs(whole - stages), 1e-9 * (a[ke] + std::abs(a[pe])));
+  std::ifstream x(out / "fields" / "fields.xmf");
+  std::stringstream text;
+  text << x.rdbuf();
+  EXPECT_NE(text.str().find("fields_00002.h5:/advection_energy_source"), std::string::npos) << text.str();
+  EXPECT_TRUE(fs::exists(out / "fields" / "fields_00002.h5"));
 }
 
 // case.resolved.yaml is the case as run: run again, it must resolve to the same text and give the

@@ -13,8 +13,9 @@ namespace tessera::test {
 
 inline constexpr double kTaylorGreenL = 2 * M_PI;
 
-// The solver on decomp (a box (0, L) x (0, L) x (0, L / n)), at t = 0.
-inline std::unique_ptr<FlowSolver> taylor_green(const Decomposition& decomp, int n, double nu) {
+// The solver on decomp (a box (0, L) x (0, L) x (0, L / n)), at t = 0; with energy_budget, the
+// stages' energy changes measured (FlowSettings::energy_budget).
+inline std::unique_ptr<FlowSolver> taylor_green(const Decomposition& decomp, int n, double nu, bool energy_budget = false) {
   FlowSettings st;
   st.cells = {n, n, 1};
   for (auto& b : st.boundaries) b = {BoundaryKind::periodic, BoundaryKind::periodic};
@@ -23,6 +24,7 @@ inline std::unique_ptr<FlowSolver> taylor_green(const Decomposition& decomp, int
   st.gas = {1.0, nu};
   st.liquid = {1.0, nu};
   st.poisson.rtol = 1e-12;
+  st.energy_budget = energy_budget;
   auto s = std::make_unique<FlowSolver>(decomp, st);
   const FluidGrid& g = s->grid();
   s->initialize([&](int i, int j, int k) {
