@@ -560,8 +560,8 @@ def coupled_model(a, b, runs, net):
     the second side's); the multigrid's, level by level where `tessera balance` laid out its levels
     at P (fluid/multigrid_plan.hpp: each level's exchanges a V-cycle, layers and faces, its gathers,
     the coarsest level's all-gather; V-cycles a flow step from the 2-rank run), else scaled from the
-    2-rank run's as the field's (below); the Poisson's 3 reductions per Krylov
-    iteration, and per DEM sub-step dem_model's swaps and list check, plus 6 swaps of the bodies' sums
+    2-rank run's as the field's (below); the Poisson's reductions per Krylov
+    iteration (2, or 3 in runs before CG's merged inner products), and per DEM sub-step dem_model's swaps and list check, plus 6 swaps of the bodies' sums
     per flow step (C3's loads, C4a's sums and velocities, C7's moves, the ghosts' refresh). Where
     D/iterations.json counts the Poisson's iterations on P ranks, the Poisson's time, its reductions
     and the multigrid's exchanges scale by their ratio to 1 rank's (and by the exchanges a V-cycle at P
@@ -687,7 +687,10 @@ def coupled_model(a, b, runs, net):
             per_exchange = {k: sum(message_time(net, per_face[k] * f, line) + (sides[d] - 1) * overhead
                                    for d, f in face.items()) for k in ("field", "multigrid")}
             plan = row.get("multigrid_" + cuts)
-            reductions = 3 * iters * ratio * math.ceil(math.log2(p)) * red
+            # The Krylov's reductions an iteration: 2 with CG's merged inner products (summary's
+            # poisson.reductions_per_iteration, since 2026-12-05), 3 before (runs that lack the key).
+            per_iteration = two["poisson"].get("reductions_per_iteration", 3)
+            reductions = per_iteration * iters * ratio * math.ceil(math.log2(p)) * red
             if plan and two["poisson"].get("exchanges_per_cycle"):
                 # The multigrid's levels at P (fluid/multigrid_plan.hpp, laid out by `tessera
                 # balance` on these cuts): each level's exchanges a V-cycle, each exchange along

@@ -579,7 +579,8 @@ void FlowScene::summarise(nlohmann::json& s) {
                   {"levels", flow_->poisson_levels()},
                   {"gathered_levels", flow_->poisson_gathered_levels()},
                   {"two_layer_levels", flow_->poisson_two_layer_levels()},
-                  {"exchanges_per_cycle", flow_->poisson_exchanges_per_cycle()}};
+                  {"exchanges_per_cycle", flow_->poisson_exchanges_per_cycle()},
+                  {"reductions_per_iteration", flow_->settings().poisson.single_reduction ? 2 : 3}};
   s["dt_limits"] = limits_;
   s["cell_steps_per_second_per_core"] =
       double(cells) * steps_run / std::max(s["loop_seconds"].get<double>(), 1e-9) / decomp_->size();

@@ -64,6 +64,7 @@ PoissonSettings FlowSettings::poisson_from_config(const ConfigNode& fluid) {
     s.max_iterations = int(p->integer("max_iterations", 1, 100000, s.max_iterations));
     s.reuse_preconditioner = int(p->integer("reuse_preconditioner", 1, 100000, s.reuse_preconditioner));
     s.petsc_options = p->text("petsc_options", "");
+    s.single_reduction = p->flag("single_reduction", s.single_reduction);
     s.geometric_multigrid = p->choice("preconditioner", {"multigrid", "petsc"}, "multigrid") == "multigrid";
     if (const auto mg = p->optional_section("multigrid")) {
       s.pre_sweeps = int(mg->integer("pre_sweeps", 1, 20, s.pre_sweeps));

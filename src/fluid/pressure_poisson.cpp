@@ -56,6 +56,7 @@ PressurePoisson::PressurePoisson(const FluidGrid& grid, const PoissonSettings& s
   check(KSPSetOptionsPrefix(ksp_, "poisson_"), "KSPSetOptionsPrefix");
   check(KSPSetType(ksp_, KSPCG), "KSPSetType");
   check(KSPSetNormType(ksp_, KSP_NORM_UNPRECONDITIONED), "KSPSetNormType");
+  if (settings_.single_reduction) check(KSPCGUseSingleReduction(ksp_, PETSC_TRUE), "KSPCGUseSingleReduction");
   PC pc;
   check(KSPGetPC(ksp_, &pc), "KSPGetPC");
   if (settings_.geometric_multigrid) {
