@@ -481,16 +481,10 @@ void FlowScene::balance_if_due(const RunOptions& opt) {
 // restart. The file, DIR/repartition.h5, is removed after.
 void FlowScene::repartition(const CutPlanes& cuts, const RunOptions& opt) {
   const std::string path = opt.output_dir + "/repartition.h5";
-  std::vector<NamedCellField> extra = bodies_ ? bodies_->checkpoint_fields() : std::vector<NamedCellField>{};
-  const bool budget = flow_->settings().energy_budget;  // its per-cell source moves with the cuts
-  if (budget) extra.emplace_back("advection_energy_source", &flow_->advection_energy_source());
-  write_flow_checkpoint(path, *flow_, extra);
+  write_flow_checkpoint(path, *flow_, bodies_ ? bodies_->checkpoint_fields() : std::vector<NamedCellField>{});
   decomp_->set_cuts(cuts);
   flow_->repartition(*decomp_);
   read_flow_checkpoint(path, *flow_);
-  if (budget)
-    read_checkpoint_cell_field(path, flow_->grid(), "advection_energy_source", flow_->mutable_advection_energy_source(),
-                               "the energy budget's advection source");
   if (bodies_) {
     bodies_->repartition(path);
     bodies_->add_fields(*fields_);

@@ -163,6 +163,7 @@ class FlowSolver {
     double advection = 0, viscous = 0, projection = 0;
   };
   const EnergyBudget& energy_budget() const { return energy_budget_; }
+  void set_energy_budget(const EnergyBudget& b) { energy_budget_ = b; }  // a restart's
   // With settings.energy_budget: per owned cell, the kinetic energy its faces' momentum fluxes made
   // in the advection since the start (J/m^3, half of each face's share to each of its two cells; F12a).
   const std::vector<double>& advection_energy_source() const { return advection_source_; }

@@ -149,6 +149,14 @@ void write_flow_checkpoint(const std::string& path, const FlowSolver& flow, cons
     }
     for (const auto& [name, field] : extra)
       f.write_block(name, pack(g, b, {field}).data(), b.global, b.offset, b.count, 1);
+    if (flow.settings().energy_budget) {  // F12a: the budget goes on after a restart or a rebalance
+      const FlowSolver::EnergyBudget& e = flow.energy_budget();
+      f.set_attribute("energy_advection", e.advection);
+      f.set_attribute("energy_viscous", e.viscous);
+      f.set_attribute("energy_projection", e.projection);
+      f.write_block("advection_energy_source", pack(g, b, {&flow.advection_energy_source()}).data(), b.global,
+                    b.offset, b.count, 1);
+    }
   }
   MPI_Barrier(g.comm());
   if (comm_rank(g.comm()) == 0) fs::rename(tmp, path);
@@ -171,6 +179,13 @@ void read_flow_checkpoint(const std::string& path, FlowSolver& flow) {
     unpack(g, fb, f.read_block(nm, fb.global, fb.offset, fb.count, 1), {&flow.mutable_face_velocity(d)});
   }
   flow.set_clock(f.attribute_double("time"), f.attribute_long("steps"), f.attribute_double("last_dt"));
+  // F12a: a checkpoint written with the energy budget carries it on; one without starts it at zero.
+  if (flow.settings().energy_budget && f.has_attribute("energy_advection") && f.has("advection_energy_source")) {
+    flow.set_energy_budget({f.attribute_double("energy_advection"), f.attribute_double("energy_viscous"),
+                            f.attribute_double("energy_projection")});
+    unpack(g, b, f.read_block("advection_energy_source", b.global, b.offset, b.count, 1),
+           {&flow.mutable_advection_energy_source()});
+  }
   flow.refresh();
 }
 

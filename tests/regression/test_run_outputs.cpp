@@ -138,6 +138,24 @@ TEST(RunOutputs, FlowEnergyBudgetInSeriesSummaryAndFields) {
   text << x.rdbuf();
   EXPECT_NE(text.str().find("fields_00002.h5:/advection_energy_source"), std::string::npos) << text.str();
   EXPECT_TRUE(fs::exists(out / "fields" / "fields_00002.h5"));
+
+  // A restart goes on with the budget (the checkpoint carries it): stopped at 0.5 ms and restarted,
+  // the same sums as the run above (the flow's restart is bitwise; bound 1e-12 of each).
+  const fs::path half = fs::temp_directory_path() / "tessera_energy_budget_restart";
+  fs::remove_all(half);
+  const std::string common = std::string(TESSERA_BIN) + " run " + TESSERA_SOURCE_DIR +
+                             "/cases/drop_impact/pool_bench.yaml --quiet --set fluid.cells=[16,16,16]"
+                             " --set fluid.energy_budget=true --set output.series_interval=1e-4"
+                             " --set output.snapshot_interval=5e-4 --output " + half.string();
+  ASSERT_EQ(run_shell(common + " --set run.end_time=5e-4").code, 0);
+  const auto again = run_shell(common + " --set run.end_time=1e-3 --restart " + (half / "checkpoint.h5").string());
+  ASSERT_EQ(again.code, 0) << again.output;
+  std::ifstream in2(half / "summary.json");
+  const auto s2 = nlohmann::json::parse(in2);
+  for (const char* stage : {"advection", "viscous", "projection"}) {
+    const double whole_run = s["quantities"]["energy_budget"][stage], restarted = s2["quantities"]["energy_budget"][stage];
+    EXPECT_NEAR(restarted, whole_run, 1e-12 * std::abs(whole_run)) << stage;
+  }
 }
 
 // case.resolved.yaml is the case as run: run again, it must resolve to the same text and give the
