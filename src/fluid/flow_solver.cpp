@@ -254,8 +254,10 @@ FlowStepStats FlowSolver::advance(double dt) {
     for (int q = 0; q < 3; ++q)
       for (std::size_t c = 0; c < rho_.size(); ++c) advection_change_[q][c] = rho_[c] * u_[q][c] - advection_change_[q][c];
   if (settings_.liquid.viscosity > 0 || settings_.gas.viscosity > 0) {
-    auto t = timers_.scope("viscous");
-    viscous(dt);
+    {
+      auto t = timers_.scope("viscous");
+      viscous(dt);
+    }
     if (budget) {
       const double k = kinetic_energy();
       energy_budget_.viscous += k - kinetic;
