@@ -506,19 +506,19 @@ bool FlowScene::after_step(const RunOptions& opt) {
   if (sample) {
     next_series_ = series_interval_ > 0 ? Schedule(series_interval_, flow_->time()).next() : flow_->time();
     const double volume = liquid_volume(), ke = flow_->kinetic_energy(), front = front_position();
-    std::string bodies;
-    if (bodies_) bodies = bodies_->series_row();
+    std::string tail;  // the bodies' columns, then the energy budget's
+    if (bodies_) tail = bodies_->series_row();
     if (flow_->settings().energy_budget) {
       const double potential = flow_->potential_energy();
       const auto& b = flow_->energy_budget();
       std::ostringstream row;
       row.precision(10);
       row << ',' << potential << ',' << b.advection << ',' << b.viscous << ',' << b.projection;
-      bodies += row.str();
+      tail += row.str();
     }
     if (flow_->grid().rank() == 0)
       series_ << flow_->time() << ',' << last_.dt << ',' << last_limit_ << ',' << last_.poisson.iterations << ','
-              << last_.poisson.residual << ',' << volume << ',' << ke << ',' << vmax << ',' << front << bodies
+              << last_.poisson.residual << ',' << volume << ',' << ke << ',' << vmax << ',' << front << tail
               << std::endl;  // flushed: a batch job's series can be followed while it runs
   }
   return at_rest;
