@@ -64,7 +64,8 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
   std::array<int, 3> procs{int(pm), int(pn), int(pp)};
   std::array<std::vector<int>, 3> blocks;
   for (int d = 0; d < 3; ++d) blocks[d].assign(own0[d], own0[d] + procs[d]);
-  const auto plan = plan_multigrid(blocks, {grid.periodic(0), grid.periodic(1), grid.periodic(2)}, ghost_layers_);
+  plan_ = plan_multigrid(blocks, {grid.periodic(0), grid.periodic(1), grid.periodic(2)}, ghost_layers_);
+  const auto& plan = plan_;
   // The ranks of the level being made, known on every rank: the rank (on transfer_comm_) of each
   // block (x fastest), and this rank's place.
   std::vector<int> rank_of(std::size_t{1} * procs[0] * procs[1] * procs[2]);
@@ -249,7 +250,6 @@ void CellMultigrid::set_coefficients(const std::vector<double>& rho, bool coarse
     // The coarse face on the low side of cell (I, J, K) along d.
     auto face = [&](int d, int I, int J, int K) {
       const int idx[3] = {I, J, K};
-      const int nc = C.n[d];
       int lo[3], hi[3];  // the fine faces on the coarse face's plane
       for (int e = 0; e < 3; ++e) {
         lo[e] = C.fine_start[e][idx[e]];
@@ -259,13 +259,8 @@ void CellMultigrid::set_coefficients(const std::vector<double>& rho, bool coarse
       for (int c = lo[2]; c < hi[2]; ++c)
         for (int b = lo[1]; b < hi[1]; ++b)
           for (int a = lo[0]; a < hi[0]; ++a) sum += f.coef[d][f.at(a, b, c)];
-      // Over the distance between the coarse centres in fine cells; at a domain face, the
-      // distance from the centre to the face in fine half cells (the fine term's distance).
-      const int I0 = idx[d];
-      const double distance = !grid_.periodic(d) && (I0 == 0 || I0 == nc)
-                                  ? C.width(d, I0 == 0 ? 0 : nc - 1)
-                                  : 0.5 * (C.width(d, (I0 - 1 + nc) % nc) + C.width(d, I0 % nc));
-      return sum / distance;
+      // Over the ratio of the coarse centres' distance to the fine ones' (theory F9a).
+      return sum / coarse_face_distance(plan_[l - 1], plan_[l], d, idx[d], grid_.periodic(d));
     };
     auto with_high_face = [](std::array<int, 3> m, int d) {
       m[d] += 1;

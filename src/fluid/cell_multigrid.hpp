@@ -44,6 +44,7 @@
 
 #include "fluid/fluid_grid.hpp"
 #include "fluid/cell_halo.hpp"
+#include "fluid/multigrid_plan.hpp"
 
 namespace tessera {
 
@@ -173,6 +174,7 @@ class CellMultigrid {
   std::vector<MPI_Comm> level_comms_;          // the gathered levels' communicators
   CellHalo::Traffic transfer_traffic_;
   std::vector<std::unique_ptr<Level>> levels_;
+  std::vector<MultigridLevelPlan> plan_;  // the levels' lay-out (sizes, blocks, widths)
 };
 
 }  // namespace tessera

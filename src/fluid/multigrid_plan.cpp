@@ -46,6 +46,17 @@ std::vector<MultigridLevelPlan> plan_multigrid(std::array<std::vector<int>, 3> o
           if (face > kTwoLayersFace) L.layers = 1;
         }
     }
+    for (int d = 0; d < 3; ++d)
+      if (plan.empty()) {
+        L.span[d].assign(std::size_t(n[d]), 1);
+      } else {
+        for (int I = 0; I < n[d]; ++I) {
+          int w = 0;
+          for (int i = fine_start[d][std::size_t(I)]; i < fine_start[d][std::size_t(I) + 1]; ++i)
+            w += plan.back().span[d][std::size_t(i)];
+          L.span[d].push_back(w);
+        }
+      }
     plan.push_back(std::move(L));
     if (long(n[0]) * n[1] * n[2] <= kCoarsestCells) break;
     // Pair the cells of each rank's block along every direction that can be coarsened (a block
@@ -82,6 +93,17 @@ std::vector<MultigridLevelPlan> plan_multigrid(std::array<std::vector<int>, 3> o
       }
   }
   return plan;
+}
+
+double coarse_face_distance(const MultigridLevelPlan& fine, const MultigridLevelPlan& coarse, int d, int I,
+                            bool periodic) {
+  const int nc = coarse.n[d], nf = fine.n[d], i = coarse.fine_start[d][std::size_t(I)];
+  const auto& W = coarse.span[d];
+  const auto& w = fine.span[d];
+  if (!periodic && I == 0) return double(W.front()) / w.front();
+  if (!periodic && I == nc) return double(W.back()) / w.back();
+  auto at = [](const std::vector<int>& v, int k, int n) { return v[std::size_t((k + n) % n)]; };
+  return double(at(W, I - 1, nc) + at(W, I, nc)) / double(at(w, i - 1, nf) + at(w, i, nf));
 }
 
 int smoothing_exchanges(int sweeps, int layers, bool from_zero, bool ghosts_after) {

@@ -16,6 +16,9 @@ struct MultigridLevelPlan {
   // Along each direction, the first cell of the next finer level's aggregate I (I = 0..n, the last
   // entry the finer level's size); empty on the finest level.
   std::array<std::vector<int>, 3> fine_start;
+  // Along each direction, each cell's width in finest cells (an odd block ends in a single cell,
+  // which the coarser levels keep: a level's widths need not be equal).
+  std::array<std::vector<int>, 3> span;
   // Gathered from the next finer level along d: ranks 2c and 2c + 1 of the finer level hand their
   // aggregates to 2c. parts[d]: the aggregates of each finer block along d (the parts' lengths),
   // before the pairs merge (empty where nothing is gathered).
@@ -33,6 +36,13 @@ struct MultigridLevelPlan {
 // at most kTwoLayersFace cells), else 1.
 std::vector<MultigridLevelPlan> plan_multigrid(std::array<std::vector<int>, 3> blocks, const std::array<bool, 3>& periodic,
                                                int ghost_layers);
+
+// The coarse face coefficient along d on the low side of coarse cell I (I = 0..coarse.n[d]) is the
+// sum of the fine coefficients across it over this: the distance between the two coarse centres
+// over the distance between the two fine centres across the face, both in finest cells (at a
+// domain face, from the centre to the face); 2 between pairs of equal cells (theory F9a).
+double coarse_face_distance(const MultigridLevelPlan& fine, const MultigridLevelPlan& coarse, int d, int I,
+                            bool periodic);
 
 // Ghost exchanges of one smoothing call (CellMultigrid::smooth): `sweeps` red-black sweeps on a
 // level of `layers` ghost layers, from x = 0 or not, the first ghost layer current at the end or not.
