@@ -68,14 +68,29 @@ std::vector<MultigridLevelPlan> plan_multigrid(std::array<std::vector<int>, 3> o
     for (int d = 0; d < 3; ++d) {
       ok[d] = n[d] >= 4 && (!periodic[d] || n[d] % 2 == 0);
       for (int c : own[d]) ok[d] = ok[d] && (!periodic[d] || c % 2 == 0);
-      for (int c : own[d]) merge[d] = merge[d] || (ok[d] && procs[d] > 1 && (c + 1) / 2 < 2);
+      // The aggregates of the block of c cells from cell `first`: pairs; an odd block's last cell
+      // alone, or, where it is narrower than the cell before it (what is left of a finer level's
+      // single cell), with that pair (a triple), so that no coarser level keeps a sliver.
+      const auto& span = plan.back().span[d];
+      auto aggregates = [&](int c, int first) {
+        if (!ok[d]) return c;
+        const bool triple = c % 2 == 1 && c >= 3 && span[std::size_t(first + c - 1)] < span[std::size_t(first + c - 2)];
+        return triple ? c / 2 : (c + 1) / 2;
+      };
+      {
+        int first = 0;
+        for (int c : own[d]) {
+          merge[d] = merge[d] || (ok[d] && procs[d] > 1 && aggregates(c, first) < 2);
+          first += c;
+        }
+      }
       fine_start[d].clear();
       int first = 0;
       for (auto& c : own[d]) {
-        const int pairs = ok[d] ? (c + 1) / 2 : c;
-        for (int I = 0; I < pairs; ++I) fine_start[d].push_back(first + (ok[d] ? 2 * I : I));
+        const int count = aggregates(c, first);
+        for (int I = 0; I < count; ++I) fine_start[d].push_back(first + (ok[d] ? 2 * I : I));
         first += c;
-        c = pairs;
+        c = count;
       }
       fine_start[d].push_back(first);
       n[d] = int(fine_start[d].size()) - 1;
