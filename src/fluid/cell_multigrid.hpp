@@ -7,14 +7,14 @@
 // aggregates the fine cells of one rank's block in pairs along each direction that can be coarsened;
 // a block of odd length ends in a single cell, so odd sizes coarsen too (180 -> 90 -> 45 -> 23 ->
 // 12 -> 6; ending in a triple instead took 13-14 CG iterations where pairs take 10,
-// test_cell_multigrid). A direction is not coarsened (semi-coarsening) where it is shorter than 4
+// test_cell_multigrid), and on the coarser levels that cell, once narrower than the one before it,
+// joins the pair before it (no slivers; multigrid_plan.hpp). A direction is not coarsened (semi-coarsening) where it is shorter than 4
 // cells, or, periodic, where a block or the whole is odd (red-black colouring needs even periodic
 // lengths and uniform pairs there); where a rank's block would fall below 2 cells on several
 // ranks, the coarser level is gathered onto half the ranks along that direction (below). A coarse face coefficient is the sum of the fine
-// coefficients across it over the distance between the two coarse centres in fine cells,
-// (w_low + w_high) / 2 for aggregates of w_low and w_high cells (fine cells in series); at a
-// domain face, over the width w of the coarse cell beside it (its centre lies w / 2 fine cells
-// from the face, a fine centre 1 / 2: the outflow term's distance; theory F9a). Fine residuals are summed into the coarse cell (the rows are cell integrals),
+// coefficients across it times the fine centres' distance across it over the coarse centres', both
+// in finest cells (at a domain face, the distances to the face: the outflow term's; theory F9a,
+// coarse_face_distance). Fine residuals are summed into the coarse cell (the rows are cell integrals),
 // corrections are injected back (the transpose): with red-black Gauss-Seidel smoothing, forward
 // before and reversed after the coarse correction, the V-cycle is a symmetric positive
 // (semi-)definite preconditioner, as CG needs. The V-cycle reads its coefficients in single

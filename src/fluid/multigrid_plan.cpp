@@ -60,7 +60,7 @@ std::vector<MultigridLevelPlan> plan_multigrid(std::array<std::vector<int>, 3> o
     plan.push_back(std::move(L));
     if (long(n[0]) * n[1] * n[2] <= kCoarsestCells) break;
     // Pair the cells of each rank's block along every direction that can be coarsened (a block
-    // of odd length ends in a single cell; uniform pairs of an even whole where periodic, for the
+    // of odd length ends in a single cell or a triple, below; uniform pairs of an even whole where periodic, for the
     // red-black colouring). Where a block would fall below 2 cells on several ranks, the coarser
     // level is gathered along that direction: ranks 2c and 2c + 1 hand their aggregates to 2c.
     std::array<bool, 3> ok{}, merge{};

@@ -16,8 +16,8 @@ struct MultigridLevelPlan {
   // Along each direction, the first cell of the next finer level's aggregate I (I = 0..n, the last
   // entry the finer level's size); empty on the finest level.
   std::array<std::vector<int>, 3> fine_start;
-  // Along each direction, each cell's width in finest cells (an odd block ends in a single cell,
-  // which the coarser levels keep: a level's widths need not be equal).
+  // Along each direction, each cell's width in finest cells (an odd block's single cell, or a
+  // triple, makes a level's widths unequal).
   std::array<std::vector<int>, 3> span;
   // Gathered from the next finer level along d: ranks 2c and 2c + 1 of the finer level hand their
   // aggregates to 2c. parts[d]: the aggregates of each finer block along d (the parts' lengths),
