@@ -54,6 +54,9 @@ FractureSettings read_fracture_settings(const ConfigNode& blast) {
   if (blast.has("time_step")) s.time_step = blast.real("time_step", Dim::time, Range::positive());
   s.stability_factor = blast.real("stability_factor", Dim::none, Range::half_open(0, 1), s.stability_factor);
   s.damping = blast.flag("damping", true);
+  s.implicit_damping = blast.flag("implicit_damping", false);
+  s.damping_rtol = blast.real("damping_rtol", Dim::none, Range::positive(), s.damping_rtol);
+  s.damping_theta = blast.real("damping_theta", Dim::none, Range::closed(0.5, 1), s.damping_theta);
   const std::string stepping = blast.choice("stepping", {"uniform", "travel", "stability"}, "uniform");
   s.stepping = stepping == "travel" ? Stepping::travel : (stepping == "stability" ? Stepping::stability : Stepping::uniform);
   s.travel_limit = blast.real("travel_limit", Dim::length, Range::positive(), s.travel_limit);
@@ -503,6 +506,10 @@ void BlastScene::summarise(nlohmann::json& s) {
   s["element_steps"] = counts[0];
   s["bond_evaluations"] = counts[1];
   s["contact_evaluations"] = counts[2];
+  if (solver_->settings().implicit_damping) {  // B9a: the dashpots' solves (the same on every rank)
+    s["damping_solves"] = solver_->damping_solves();
+    s["damping_iterations"] = solver_->damping_iterations();
+  }
   s["contact_spheres"] = solver_->sphere_count();
   s["contact_list_builds"] = solver_->list_builds();
   s["contact_list_refreshes"] = solver_->list_refreshes();

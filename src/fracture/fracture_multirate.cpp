@@ -85,6 +85,31 @@ void FractureSolver::kick_impulse(std::size_t i) {
 void FractureSolver::assign_levels() {
   const std::size_t n = block_.size();
   level_.assign(n, 0);
+  if (settings_.stepping == Stepping::stability && settings_.implicit_damping && settings_.damping) {
+    // B9a: each element's level from the springs that act on it this macro step, the intact bonds
+    // and the listed pairs. A pair is listed on its elements' owners, so the owner counts all of an
+    // element's pairs; the largest level over the ranks is the owner's.
+    std::vector<double>& pairs = scratch_pairs_;
+    pairs.assign(n, 0.0);
+    // A listed pair counts when it may touch within the macro step: its spheres' gap now within
+    // twice what its two elements can travel in dt0 at their speeds now (centroid and farthest
+    // vertex's turn). From the state alone, so that a restart takes the same levels.
+    auto speed = [&](std::size_t e) { return norm(v_[e]) + norm(w_[e]) * reach_[e]; };
+    for (const ListedPair& lp : pairs_) {
+      const std::size_t a = static_cast<std::size_t>(lp.ea), b = static_cast<std::size_t>(lp.eb);
+      const double gap = norm(sphere_position(static_cast<std::size_t>(lp.second)) - sphere_position(static_cast<std::size_t>(lp.first))) -
+                         spheres_[static_cast<std::size_t>(lp.first)].radius - spheres_[static_cast<std::size_t>(lp.second)].radius;
+      if (gap > 2 * dt_ * (speed(a) + speed(b))) continue;
+      pairs[a] += 1, pairs[b] += 1;
+    }
+    // Never finer than B9's bound (every face bonded and pressed by all its spheres), which the
+    // explicit scheme's levels take: a count of pairs that may touch can exceed it.
+    for (std::size_t e = 0; e < n; ++e)
+      level_[e] = level_for(settings_.stability_factor * std::max(acting_limit(e, pairs[e]), element_limit(e)));
+    if (decomp_.size() > 1)
+      MPI_Allreduce(MPI_IN_PLACE, level_.data(), static_cast<int>(n), MPI_INT, MPI_MAX, decomp_.comm());
+    return;
+  }
   for (std::size_t e = 0; e < n; ++e) {
     int k = 0;
     if (settings_.stepping == Stepping::travel) {
@@ -187,6 +212,12 @@ void FractureSolver::exchange_halo(int first, int K) {
 
 void FractureSolver::multirate_step() {
   const int rank = decomp_.rank(), P = decomp_.size();
+  // The levels from the springs that act (B9a) need the macro step's contact list first.
+  const bool acting = settings_.stepping == Stepping::stability && settings_.implicit_damping && settings_.damping;
+  if (!spheres_.empty() && acting) {
+    auto t = timers_.scope("contact_list");
+    update_list(dt_);
+  }
   {
     auto t = timers_.scope("levels");
     assign_levels();
@@ -198,7 +229,7 @@ void FractureSolver::multirate_step() {
   auto& bonds = bond_buckets_;
   auto& contacts = contact_buckets_;
   clear_buckets(bonds, K + 1), clear_buckets(contacts, K + 1);
-  if (!spheres_.empty()) {
+  if (!spheres_.empty() && !acting) {
     auto t = timers_.scope("contact_list");
     update_list(dt_);
   }
@@ -359,6 +390,15 @@ void FractureSolver::multirate_step() {
     for (int e : owned_by_rank_[static_cast<std::size_t>(rank)]) advance_to(static_cast<std::size_t>(e), time_);
     std::fill(t_el_.begin(), t_el_.end(), time_);
     if (P > 1) exchange_elements(owned_by_rank_);
+    if (acting) {
+      // B9a: the bond dashpots over the macro step, all together, at the states of its end; the
+      // velocities they change travel again.
+      {
+        auto t = timers_.scope("damping");
+        damp_bonds(dt_);
+      }
+      if (P > 1) exchange_elements(owned_by_rank_);
+    }
   }
   // Every element is at the macro step's end: all clocks agree again (no rounding drift).
   std::fill(t_el_.begin(), t_el_.end(), time_);

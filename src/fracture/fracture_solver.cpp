@@ -39,6 +39,31 @@ FractureSolver::FractureSolver(const Decomposition& decomp, BondedBlock block, F
                          std::to_string(std::sqrt(2 * settings_.bond.fracture_energy * settings_.bond.kn) / 1e6) +
                          " MPa, so that the softening branch exists (docs/theory.md B4)");
   const std::size_t n = block_.size();
+  // Each face's levers about the principal axes (the largest |e_a x r|^2 of its vertices) and its area.
+  face_k_.resize(n);
+  for (std::size_t e = 0; e < n; ++e)
+    for (int f = 0; f < 4; ++f) {
+      Vec3 nf, c;
+      double a;
+      face_frame(block_, static_cast<int>(e), f, nf, c, a);
+      auto& fk = face_k_[e][static_cast<std::size_t>(f)];
+      for (int ax = 0; ax < 3; ++ax) {
+        double arm2 = 0;
+        for (int j = 0; j < 3; ++j) {
+          const Vec3& r = block_.vertices[e][kFaceVertices[f][j]];
+          arm2 = std::max(arm2, norm2(r) - r[ax] * r[ax]);
+        }
+        fk[static_cast<std::size_t>(ax)] = arm2;
+      }
+      fk[3] = a;
+    }
+  element_bonds_.assign(n, {});
+  for (std::size_t b = 0; b < block_.bonds.size(); ++b)
+    for (int e : {block_.bonds[b].master, block_.bonds[b].slave})
+      element_bonds_[static_cast<std::size_t>(e)].push_back(static_cast<int>(b));
+  reach_.assign(n, 0.0);
+  for (std::size_t e = 0; e < n; ++e)
+    for (const Vec3& p : block_.vertices[e]) reach_[e] = std::max(reach_[e], norm(p));
   choose_steps();
   // Owners (element_partition.hpp), from the work of the levels just chosen.
   work_ = element_work(block_, settings_.stepping == Stepping::stability ? stable_level_ : std::vector<int>(n, 0));
@@ -69,13 +94,7 @@ FractureSolver::FractureSolver(const Decomposition& decomp, BondedBlock block, F
   pose_cache_.resize(n), pose_epoch_.assign(n, -1);
   element_spheres_.assign(n, {});
   skin_ = 0.1 * block_.min_edge;
-  reach_.assign(n, 0.0), travel_.assign(n, 0.0);
-  for (std::size_t e = 0; e < n; ++e)
-    for (const Vec3& p : block_.vertices[e]) reach_[e] = std::max(reach_[e], norm(p));
-  element_bonds_.assign(n, {});
-  for (std::size_t b = 0; b < block_.bonds.size(); ++b)
-    for (int e : {block_.bonds[b].master, block_.bonds[b].slave})
-      element_bonds_[static_cast<std::size_t>(e)].push_back(static_cast<int>(b));
+  travel_.assign(n, 0.0);
   add_surface_spheres();
   if (hole_) {
     // Faces on the hole: every node within 0.1 % of the radius from the axis, facing the axis.
@@ -120,20 +139,30 @@ double FractureSolver::element_limit(std::size_t e) const {
   const double ns = (d - 1) * (d - 2) / 2.0;
   double k = 0, k_rot[3] = {0, 0, 0};
   for (int f = 0; f < 4; ++f) {
-    Vec3 n, c;
-    double a;
-    face_frame(block_, static_cast<int>(e), f, n, c, a);
-    const double kf = settings_.bond.kn * a + ns * settings_.contact_stiffness;
+    const double kf = settings_.bond.kn * face_k_[e][static_cast<std::size_t>(f)][3] + ns * settings_.contact_stiffness;
     k += kf;
-    for (int ax = 0; ax < 3; ++ax) {
-      double arm2 = 0;
-      for (int j = 0; j < 3; ++j) {
-        const Vec3& r = block_.vertices[e][kFaceVertices[f][j]];
-        arm2 = std::max(arm2, norm2(r) - r[ax] * r[ax]);
-      }
-      k_rot[ax] += kf * arm2;
-    }
+    for (int ax = 0; ax < 3; ++ax) k_rot[ax] += kf * face_k_[e][static_cast<std::size_t>(f)][ax];
   }
+  const Vec3& I = block_.inertia[e];
+  return std::min({std::sqrt(block_.mass[e] / k), std::sqrt(I.x / k_rot[0]), std::sqrt(I.y / k_rot[1]),
+                   std::sqrt(I.z / k_rot[2])});
+}
+
+double FractureSolver::acting_limit(std::size_t e, double pairs) const {
+  // B9a: the springs that act now: the intact bonds' k_n A on their faces, and k_c for each listed
+  // contact pair of the element at its farthest vertex's lever (a bound).
+  double k = pairs * settings_.contact_stiffness, k_rot[3];
+  const double reach2 = reach_[e] * reach_[e];
+  for (double& kr : k_rot) kr = k * reach2;
+  for (int b : element_bonds_[e]) {
+    if (!broken_.empty() && broken_[static_cast<std::size_t>(b)]) continue;  // (none yet at set-up)
+    const BondGeometry& g = block_.bonds[static_cast<std::size_t>(b)];
+    const auto& fk = face_k_[e][static_cast<std::size_t>(g.master == static_cast<int>(e) ? g.master_face : g.slave_face)];
+    const double kf = settings_.bond.kn * fk[3];
+    k += kf;
+    for (int ax = 0; ax < 3; ++ax) k_rot[ax] += kf * fk[ax];
+  }
+  if (k == 0) return 1e300;  // free: no spring acts on it
   const Vec3& I = block_.inertia[e];
   return std::min({std::sqrt(block_.mass[e] / k), std::sqrt(I.x / k_rot[0]), std::sqrt(I.y / k_rot[1]),
                    std::sqrt(I.z / k_rot[2])});
@@ -150,17 +179,24 @@ void FractureSolver::choose_steps() {
   dt_ = settings_.time_step ? *settings_.time_step : stable_dt();
   if (settings_.stepping == Stepping::stability) {
     // The macro step: the largest element's stable step (unless set); each element's level from its own.
+    // With the bond dashpots implicit (B9a), the limits of the springs that act: here every bond.
+    const bool acting = settings_.implicit_damping && settings_.damping;
     std::vector<double> limit(n);
     double largest = 0;
-    for (std::size_t e = 0; e < n; ++e) limit[e] = settings_.stability_factor * element_limit(e), largest = std::max(largest, limit[e]);
+    for (std::size_t e = 0; e < n; ++e) {
+      limit[e] = settings_.stability_factor * (acting ? acting_limit(e, 0) : element_limit(e));
+      if (limit[e] < 1e299) largest = std::max(largest, limit[e]);
+    }
     if (!settings_.time_step) dt_ = largest;
     stable_level_.assign(n, 0);
-    for (std::size_t e = 0; e < n; ++e) {
-      int k = 0;
-      while (k < settings_.max_level && std::ldexp(dt_, -k) > limit[e]) ++k;
-      stable_level_[e] = k;
-    }
+    for (std::size_t e = 0; e < n; ++e) stable_level_[e] = level_for(limit[e]);
   }
+}
+
+int FractureSolver::level_for(double limit) const {
+  int k = 0;
+  while (k < settings_.max_level && std::ldexp(dt_, -k) > limit) ++k;
+  return k;
 }
 
 void FractureSolver::setup(bool fresh) {
@@ -201,6 +237,10 @@ void FractureSolver::step() {
   {
     auto t = timers_.scope("kick");
     kick(0.5 * dt_);
+  }
+  {
+    auto t = timers_.scope("damping");
+    damp_bonds(dt_);
   }
   {
     auto t = timers_.scope("broken");
@@ -479,7 +519,8 @@ void FractureSolver::compute_forces(double time) {
 
 PairForce FractureSolver::bond_force(std::size_t b, const Pose& pi, const Pose& pj) {
   const BondLaw& law = settings_.bond;
-  const double cn = settings_.damping ? law.cn : 0, cs = settings_.damping ? law.cs : 0;
+  const bool explicit_dashpots = settings_.damping && !settings_.implicit_damping;
+  const double cn = explicit_dashpots ? law.cn : 0, cs = explicit_dashpots ? law.cs : 0;
   const BondGeometry& g = block_.bonds[b];
   const Vec3 n = pi.rot(g.normal), xi = pi.rot(g.xi), eta = pi.rot(g.eta);
   const double share = g.area / 3, u_failure = law.u_failure();

@@ -70,6 +70,9 @@ struct FractureSettings {
   double travel_limit = 1e-8;        // l: |v| dt <= l (travel levels)
   int max_level = 30;
   bool damping = true;               // false: no dashpots (energy tests)
+  bool implicit_damping = false;     // B9a: the bond dashpots all together, backward Euler
+  double damping_rtol = 1e-4;        // B9a: the solve's residual over its right-hand side (the change)
+  double damping_theta = 1;          // B9a: 1 backward Euler, 1/2 the trapezoidal rule
   bool skip_apart = true;            // B7a: pairs that cannot touch are not evaluated (false: tests)
   bool relax_born_overlaps = true;   // B7b: a pair listed at a release starts from its overlap then
   Partition partition = Partition::slabs;  // which rank owns each element (element_partition.hpp)
@@ -168,6 +171,8 @@ class FractureSolver {
   long contact_evaluations() const { return contact_evaluations_; }  // this rank, sphere pairs in range
   long bond_evaluations() const { return bond_evaluations_; }
   long element_steps() const { return element_steps_; }  // this rank
+  long damping_iterations() const { return damping_iterations_; }  // B9a's solves' CG iterations so far
+  long damping_solves() const { return damping_solves_; }
   long list_builds() const { return list_builds_; }
   long list_refreshes() const { return list_refreshes_; }  // searches of the stale elements only
   // B7b: pairs listed overlapping at a release so far, the deepest such overlap, and the pairs that
@@ -207,6 +212,9 @@ class FractureSolver {
   void pack_state(std::size_t i, bool momentum, double* o) const;
   void unpack_state(std::size_t i, bool momentum, const double* s);
   double element_limit(std::size_t e) const;
+  // B9a: the stable step of the springs that act now (intact bonds, `pairs` listed contact pairs).
+  double acting_limit(std::size_t e, double pairs) const;
+  int level_for(double limit) const;  // the smallest k with dt0 / 2^k <= limit (at most max_level)
   void choose_steps();  // dt_ and, with stability levels, each element's level (B9, B10)
   Pose pose_at(std::size_t e, double t) const;  // on its piecewise-linear path (B10)
   void assign_levels();
@@ -225,6 +233,7 @@ class FractureSolver {
     return q_[e].rotate({L_body.x / I.x, L_body.y / I.y, L_body.z / I.z});
   }
   void multirate_step();
+  void damp_bonds(double h);  // B9a: the bond dashpots over h, all bonds together (fracture_damping.cpp)
   void build_halo(int K);               // the cross pairs' elements by rank and level (every macro step)
   void exchange_halo(int first, int K);  // the due ones' states, to and from the neighbour ranks
   static void clear_buckets(std::vector<std::vector<int>>& buckets, int count);  // at least count, all empty
@@ -330,6 +339,8 @@ class FractureSolver {
   std::vector<Quaternion> build_q_;
   double max_radius_ = 0, skin_ = 0;
   std::vector<double> reach_;  // each element's farthest vertex from its centroid
+  // Per element and local face: the largest lever |e_a x r|^2 about each principal axis, and the area.
+  std::vector<std::array<std::array<double, 4>, 4>> face_k_;
   std::vector<double> moved_;  // each element's travel since its spheres were last searched
   // B7a (stability levels): each element's travel so far, a bound summed over every change of its
   // pose on this rank (the pairs' budgets are in pairs_).
@@ -338,6 +349,7 @@ class FractureSolver {
   std::vector<char> stale_;
   // Storage reused every macro step: mark_stale's speeds and partners' fastest, build_list's positions.
   std::vector<double> scratch_speed_, scratch_fastest_;
+  std::vector<double> scratch_pairs_;  // B9a: each element's listed pairs
   std::vector<Vec3> scratch_at_;
   GatherBuffers gather_;
   std::vector<std::vector<int>> due_;  // the multirate step's due elements per rank
@@ -368,6 +380,34 @@ class FractureSolver {
   long epoch_ = 0;
   std::vector<double> t_el_;      // each element's clock (its x, q are of that time)
   std::vector<Vec3> S_, A_;       // impulse and angular impulse since its last update
+  long damping_iterations_ = 0, damping_solves_ = 0;
+  // B9a's solve (fracture_damping.cpp): storage kept between calls.
+  using Block6 = std::array<double, 36>;
+  using Block6f = std::array<float, 36>;
+  struct DampingUnit {  // one bond vertex: the master face's normal, the levers, h (A/3) c_n and c_s
+    Vec3 n, ri, rj;
+    double an, at;
+  };
+  struct DampingLink {  // one intact bond with an element here
+    int i, j;
+    bool own_i, own_j;
+  };
+  struct DampingWork {
+    std::vector<DampingUnit> units;  // three per link
+    std::vector<DampingLink> links;
+    std::vector<Block6> diag, inv, off;  // per element (owned) and its inverse; per link
+    std::vector<Block6f> diag_f, inv_f, off_f, off_tf;  // the same in single precision, the links' also transposed
+    std::vector<double> x, b, r, z, p, ap;
+    std::vector<double> v0;           // theta < 1: the velocities before
+    std::vector<std::array<int, 2>> sent, read;
+    std::vector<int> neighbours;
+    std::vector<std::vector<int>> send_elements, recv_elements;
+    std::vector<std::vector<double>> send, recv;
+    std::vector<MPI_Request> requests;
+  };
+  DampingWork damping_;
+  static constexpr int kDampingTag = 1718;
+  static constexpr int kMaxDampingIterations = 1000;
   long steps_ = 0, contact_evaluations_ = 0, bond_evaluations_ = 0, element_steps_ = 0, list_builds_ = 0,
        list_refreshes_ = 0;
   PhaseTimers timers_;

@@ -1,0 +1,363 @@
+// SPDX-License-Identifier: MIT
+// The bond dashpots of every intact bond together, backward Euler (docs/theory.md B9a).
+//
+// Over a step h the dashpots alone change the elements' velocities V = (v, w) by
+//   M dV/dt = -C V,   backward Euler:   (M + h C) V+ = M V,
+// with M each element's mass and world inertia and C the sum over the bonds' vertex units of
+// J^T D J: J maps the two elements' velocities to the vertex's relative velocity
+// du = (v_j + w_j x r_j) - (v_i + w_i x r_i), D = (A/3) (c_n n n^T + c_s (1 - n n^T)) in the
+// master face's frame (B2). The system is solved by conjugate gradients preconditioned by each
+// element's 6 x 6 block; the impulses -h D du+ at the solution are then applied pairwise, equal and
+// opposite at the vertex, so linear and angular momentum are kept to round-off whatever the solve's
+// residual. Elements' positions are those of the call (the dashpots' frame does not turn in h).
+#include <algorithm>
+#include <cmath>
+#include <span>
+
+#include "core/errors.hpp"
+#include "core/exact_sum.hpp"
+#include "fracture/fracture_solver.hpp"
+
+namespace tessera {
+
+namespace {
+
+using Block6 = std::array<double, 36>;  // a 6 x 6 block, row-major
+
+
+// The inverse of a symmetric positive definite 6 x 6 block (the preconditioner applies it as a
+// product): its Cholesky factor L, L's inverse by columns, then L^-T L^-1. Six divisions and six
+// square roots, none in a chain of substitutions.
+Block6 inverse6(const Block6& a) {
+  double l[6][6] = {}, d[6];  // d: 1 / L_ii
+  for (int j = 0; j < 6; ++j) {
+    double s = a[6 * j + j];
+    for (int k = 0; k < j; ++k) s -= l[j][k] * l[j][k];
+    l[j][j] = std::sqrt(s);
+    d[j] = 1.0 / l[j][j];
+    for (int i = j + 1; i < 6; ++i) {
+      double t = a[6 * i + j];
+      for (int k = 0; k < j; ++k) t -= l[i][k] * l[j][k];
+      l[i][j] = t * d[j];
+    }
+  }
+  double m[6][6] = {};  // L^-1, lower triangular
+  for (int j = 0; j < 6; ++j) {
+    m[j][j] = d[j];
+    for (int i = j + 1; i < 6; ++i) {
+      double t = 0;
+      for (int k = j; k < i; ++k) t -= l[i][k] * m[k][j];
+      m[i][j] = t * d[i];
+    }
+  }
+  Block6 inv;
+  for (int r = 0; r < 6; ++r)
+    for (int c = r; c < 6; ++c) {
+      double t = 0;
+      for (int k = c; k < 6; ++k) t += m[k][r] * m[k][c];
+      inv[6 * r + c] = inv[6 * c + r] = t;
+    }
+  return inv;
+}
+
+}  // namespace
+
+void FractureSolver::damp_bonds(double h) {
+  if (!settings_.damping || !settings_.implicit_damping) return;
+  const int rank = decomp_.rank();
+  const std::vector<int>& owned = owned_by_rank_[static_cast<std::size_t>(rank)];
+  const BondLaw& law = settings_.bond;
+  DampingWork& w = damping_;
+  // The vertex units of the intact bonds with an element here, in bond order, in world frame (the
+  // master face's normal, each element's lever), with h folded in; and what travels per iteration:
+  // to each rank, my elements bonded to its elements, and from it, the same of its elements.
+  w.units.clear(), w.links.clear();
+  std::vector<std::array<int, 2>>&sent = w.sent, &read = w.read;
+  sent.clear(), read.clear();
+  new_epoch();
+  for (std::size_t b = 0; b < block_.bonds.size(); ++b) {
+    if (broken_[b]) continue;
+    const BondGeometry& g = block_.bonds[b];
+    const int oi = owner_[static_cast<std::size_t>(g.master)], oj = owner_[static_cast<std::size_t>(g.slave)];
+    if (oi != rank && oj != rank) continue;
+    if (oi != oj) {
+      const bool mine_i = oi == rank;
+      sent.push_back({mine_i ? oj : oi, mine_i ? g.master : g.slave});
+      read.push_back({mine_i ? oj : oi, mine_i ? g.slave : g.master});
+    }
+    const Pose& pi = pose(static_cast<std::size_t>(g.master));
+    const Pose& pj = pose(static_cast<std::size_t>(g.slave));
+    const Vec3 nw = pi.rot(g.normal);
+    const double share = settings_.damping_theta * h * g.area / 3;
+    w.links.push_back({g.master, g.slave, oi == rank, oj == rank});
+    for (int k = 0; k < 3; ++k)
+      w.units.push_back({nw, pi.rot(g.at_master[k]), pj.rot(g.at_slave[k]), share * law.cn, share * law.cs});
+  }
+  for (auto* v : {&sent, &read}) {
+    std::sort(v->begin(), v->end());
+    v->erase(std::unique(v->begin(), v->end()), v->end());
+  }
+  w.neighbours.clear(), w.send_elements.clear();
+  for (const auto& [r, e] : sent) {
+    if (w.neighbours.empty() || w.neighbours.back() != r) w.neighbours.push_back(r), w.send_elements.emplace_back();
+    w.send_elements.back().push_back(e);
+  }
+  w.recv_elements.assign(w.neighbours.size(), {});
+  std::size_t at = 0;  // both lists are by rank, and every cross bond puts its rank in both
+  for (const auto& [r, e] : read) {
+    while (w.neighbours[at] != r) ++at;
+    w.recv_elements[at].push_back(e);
+  }
+
+  // The matrix M + h C in 6 x 6 blocks: each owned element's diagonal block (its mass and world
+  // inertia R diag(I) R^T, plus J^T D J of its units), each link's block (rows: the master's
+  // velocities, columns: the slave's). A unit's J is [1, X] for the slave and -[1, X] for the
+  // master, X = -[r]x the map w -> w x r; with D = a' n n^T + a_t 1 (a' = a_n - a_t) and s = r x n
+  // (= X^T n):  X_a^T D = a' s_a n^T + a_t X_a^T,  X_a^T D X_b = a' s_a s_b^T + a_t ((r_a . r_b) 1 - r_b r_a^T).
+  const std::size_t n = block_.size();
+  w.diag.resize(n), w.inv.resize(n);
+  for (int e : owned) {
+    const std::size_t i = static_cast<std::size_t>(e);
+    const Pose& p = pose(i);
+    const Vec3& I = block_.inertia[i];
+    Block6& B = w.diag[i];
+    B.fill(0.0);
+    for (int a = 0; a < 3; ++a) {
+      B[6 * a + a] = block_.mass[i];
+      for (int c = 0; c < 3; ++c)  // R[a] is row a of body -> world
+        B[6 * (3 + a) + 3 + c] = p.R[a].x * I.x * p.R[c].x + p.R[a].y * I.y * p.R[c].y + p.R[a].z * I.z * p.R[c].z;
+    }
+  }
+  // A link's three units share n, a' and a_t, and s = r x n is linear in r: the blocks need only
+  // the sums over the vertices of r, of the products s s^T and r r^T, and of the dot products.
+  w.off.resize(w.links.size());
+  for (std::size_t l = 0; l < w.links.size(); ++l) {
+    const DampingLink& k = w.links[l];
+    const DampingUnit* u = &w.units[3 * l];
+    const double ap = u[0].an - u[0].at, at = u[0].at;
+    const double n[3] = {u[0].n.x, u[0].n.y, u[0].n.z};
+    double ri[3] = {0, 0, 0}, rj[3] = {0, 0, 0}, Sii[3][3] = {}, Sjj[3][3] = {}, Sij[3][3] = {}, Rii[3][3] = {},
+           Rjj[3][3] = {}, Rji[3][3] = {};
+    for (int v = 0; v < 3; ++v) {
+      const Vec3 si = cross(u[v].ri, u[0].n), sj = cross(u[v].rj, u[0].n);
+      const double a_[3] = {u[v].ri.x, u[v].ri.y, u[v].ri.z}, b_[3] = {u[v].rj.x, u[v].rj.y, u[v].rj.z};
+      const double si_[3] = {si.x, si.y, si.z}, sj_[3] = {sj.x, sj.y, sj.z};
+      for (int p = 0; p < 3; ++p) {
+        ri[p] += a_[p], rj[p] += b_[p];
+        for (int q = 0; q < 3; ++q) {
+          Sii[p][q] += si_[p] * si_[q], Sjj[p][q] += sj_[p] * sj_[q], Sij[p][q] += si_[p] * sj_[q];
+          Rii[p][q] += a_[p] * a_[q], Rjj[p][q] += b_[p] * b_[q], Rji[p][q] += b_[p] * a_[q];
+        }
+      }
+    }
+    const Vec3 si = cross(Vec3{ri[0], ri[1], ri[2]}, u[0].n), sj = cross(Vec3{rj[0], rj[1], rj[2]}, u[0].n);
+    const double s_i[3] = {si.x, si.y, si.z}, s_j[3] = {sj.x, sj.y, sj.z};
+    const double tii = Rii[0][0] + Rii[1][1] + Rii[2][2], tjj = Rjj[0][0] + Rjj[1][1] + Rjj[2][2],
+                 tij = Rji[0][0] + Rji[1][1] + Rji[2][2];
+    // X(r) w = w x r; X(r)^T = -X(r).
+    auto X = [](const double (&r)[3], int p, int q) {
+      const double m[3][3] = {{0, r[2], -r[1]}, {-r[2], 0, r[0]}, {r[1], -r[0], 0}};
+      return m[p][q];
+    };
+    Block6& O = w.off[l];
+    Block6* Di = k.own_i ? &w.diag[static_cast<std::size_t>(k.i)] : nullptr;
+    Block6* Dj = k.own_j ? &w.diag[static_cast<std::size_t>(k.j)] : nullptr;
+    for (int p = 0; p < 3; ++p)
+      for (int q = 0; q < 3; ++q) {
+        const double id = p == q ? 1.0 : 0.0;
+        const double vv = 3 * (ap * n[p] * n[q] + at * id);
+        // [1; X_a^T] D [1, X_b] summed over the vertices, for (a, b) = (i, i), (j, j), (i, j).
+        const double vw_i = ap * n[p] * s_i[q] + at * X(ri, p, q), vw_j = ap * n[p] * s_j[q] + at * X(rj, p, q);
+        const double wv_i = ap * s_i[p] * n[q] - at * X(ri, p, q);  // X_i^T D's (p, q): a' s_i n^T + a_t X_i^T
+        const double ww_ii = ap * Sii[p][q] + at * (tii * id - Rii[q][p]);
+        const double ww_jj = ap * Sjj[p][q] + at * (tjj * id - Rjj[q][p]);
+        const double ww_ij = ap * Sij[p][q] + at * (tij * id - Rji[p][q]);
+        if (Di) {
+          Block6& M = *Di;
+          M[6 * p + q] += vv, M[6 * p + 3 + q] += vw_i, M[6 * (3 + q) + p] += vw_i, M[6 * (3 + p) + 3 + q] += ww_ii;
+        }
+        if (Dj) {
+          Block6& M = *Dj;
+          M[6 * p + q] += vv, M[6 * p + 3 + q] += vw_j, M[6 * (3 + q) + p] += vw_j, M[6 * (3 + p) + 3 + q] += ww_jj;
+        }
+        O[6 * p + q] = -vv, O[6 * p + 3 + q] = -vw_j, O[6 * (3 + p) + q] = -wv_i, O[6 * (3 + p) + 3 + q] = -ww_ij;
+      }
+  }
+  for (int e : owned) w.inv[static_cast<std::size_t>(e)] = inverse6(w.diag[static_cast<std::size_t>(e)]);
+
+  std::vector<double>&X = w.x, &B = w.b, &R = w.r, &Z = w.z, &Pd = w.p, &AP = w.ap;
+  for (auto* v : {&X, &B, &R, &Z, &Pd, &AP}) v->assign(6 * n, 0.0);
+  // Y = (M + h C) X on the owned elements, each element's terms in the same order on any rank
+  // count (its diagonal block, then its links in bond order); X's partners' entries are current.
+  // Each block product as six axpys over rows (the diagonal blocks are symmetric; a link's block
+  // is kept transposed too), so that the six rows are added at once; the solve reads the blocks in
+  // single precision (it is memory-bound; the impulses below use the units themselves).
+  auto narrow = [](const Block6& a, Block6f& b) {
+    for (int k = 0; k < 36; ++k) b[static_cast<std::size_t>(k)] = static_cast<float>(a[static_cast<std::size_t>(k)]);
+  };
+  w.off_f.resize(w.links.size()), w.off_tf.resize(w.links.size());
+  for (std::size_t l = 0; l < w.links.size(); ++l) {
+    narrow(w.off[l], w.off_f[l]);
+    for (int a = 0; a < 6; ++a)
+      for (int c = 0; c < 6; ++c) w.off_tf[l][static_cast<std::size_t>(6 * c + a)] = w.off_f[l][static_cast<std::size_t>(6 * a + c)];
+  }
+  w.diag_f.resize(n), w.inv_f.resize(n);
+  for (int e : owned) narrow(w.diag[static_cast<std::size_t>(e)], w.diag_f[static_cast<std::size_t>(e)]),
+                      narrow(w.inv[static_cast<std::size_t>(e)], w.inv_f[static_cast<std::size_t>(e)]);
+  auto axpy6 = [](const Block6f& M, const double* x, double* y) {
+    for (int c = 0; c < 6; ++c) {
+      const double xc = x[c];
+      for (int a = 0; a < 6; ++a) y[a] += static_cast<double>(M[static_cast<std::size_t>(6 * c + a)]) * xc;
+    }
+  };
+  auto apply = [&](const std::vector<double>& Xv, std::vector<double>& Y) {
+    for (int e : owned) {
+      const std::size_t i = 6 * static_cast<std::size_t>(e);
+      for (int a = 0; a < 6; ++a) Y[i + a] = 0;
+      axpy6(w.diag_f[static_cast<std::size_t>(e)], &Xv[i], &Y[i]);
+    }
+    for (std::size_t l = 0; l < w.links.size(); ++l) {
+      const DampingLink& k = w.links[l];
+      const std::size_t i = 6 * static_cast<std::size_t>(k.i), j = 6 * static_cast<std::size_t>(k.j);
+      if (k.own_i) axpy6(w.off_tf[l], &Xv[j], &Y[i]);  // rows of B^T: B X_j
+      if (k.own_j) axpy6(w.off_f[l], &Xv[i], &Y[j]);    // rows of B: B^T X_i
+    }
+  };
+  // The partners' entries of a vector, from their owners.
+  auto share = [&](std::vector<double>& V) {
+    const std::size_t m = w.neighbours.size();
+    if (m == 0) return;
+    w.send.resize(m), w.recv.resize(m);
+    w.requests.assign(2 * m, MPI_REQUEST_NULL);
+    for (std::size_t k = 0; k < m; ++k) {
+      w.recv[k].resize(6 * w.recv_elements[k].size());
+      MPI_Irecv(w.recv[k].data(), static_cast<int>(w.recv[k].size()), MPI_DOUBLE, w.neighbours[k], kDampingTag,
+                decomp_.comm(), &w.requests[k]);
+    }
+    for (std::size_t k = 0; k < m; ++k) {
+      w.send[k].clear();
+      for (int e : w.send_elements[k])
+        w.send[k].insert(w.send[k].end(), &V[6 * static_cast<std::size_t>(e)], &V[6 * static_cast<std::size_t>(e)] + 6);
+      MPI_Isend(w.send[k].data(), static_cast<int>(w.send[k].size()), MPI_DOUBLE, w.neighbours[k], kDampingTag,
+                decomp_.comm(), &w.requests[m + k]);
+    }
+    MPI_Waitall(static_cast<int>(w.requests.size()), w.requests.data(), MPI_STATUSES_IGNORE);
+    for (std::size_t k = 0; k < m; ++k)
+      for (std::size_t a = 0; a < w.recv_elements[k].size(); ++a)
+        std::copy(&w.recv[k][6 * a], &w.recv[k][6 * a] + 6, &V[6 * static_cast<std::size_t>(w.recv_elements[k][a])]);
+  };
+  // An inner product over the owned elements: each element's six terms in order, then an exact sum
+  // over the elements and the ranks, so every rank count takes the same steps to the same bits.
+  auto inner = [&](const std::vector<double>& a, const std::vector<double>& b) {
+    ExactSum sum;
+    for (int e : owned) {
+      const std::size_t i = 6 * static_cast<std::size_t>(e);
+      double s = 0;
+      for (int c = 0; c < 6; ++c) s += a[i + c] * b[i + c];
+      sum.add(s);
+    }
+    if (decomp_.size() > 1) sum.all_reduce(decomp_.comm());
+    return sum.value();
+  };
+  auto precondition = [&](const std::vector<double>& from, std::vector<double>& to) {
+    for (int e : owned) {
+      const std::size_t i = 6 * static_cast<std::size_t>(e);
+      for (int a = 0; a < 6; ++a) to[i + a] = 0;
+      axpy6(w.inv_f[static_cast<std::size_t>(e)], &from[i], &to[i]);  // symmetric
+    }
+  };
+  auto each = [&](auto&& f) {
+    for (int e : owned)
+      for (std::size_t c = 6 * static_cast<std::size_t>(e); c < 6 * static_cast<std::size_t>(e) + 6; ++c) f(c);
+  };
+  // The change the dashpots make, dV = V+ - V, solves (M + theta h C) dV = -h C V: its right-hand
+  // side is the dashpots' impulses at V, unit by unit in double precision (so the single-precision
+  // blocks err relative to the change, not to the velocities).
+  const double theta = settings_.damping_theta, c_old = (1 - theta) / theta;
+  std::vector<double>& V0 = w.v0;
+  V0.assign(6 * n, 0.0);
+  for (int e : owned) {
+    const std::size_t i = static_cast<std::size_t>(e);
+    const double x[6] = {v_[i].x, v_[i].y, v_[i].z, w_[i].x, w_[i].y, w_[i].z};
+    std::copy(x, x + 6, &V0[6 * i]);
+  }
+  share(V0);
+  // f(i, j, du, u) for every unit: du its relative velocity at the vector's values.
+  auto each_unit = [&](const std::vector<double>& Vv, auto&& f) {
+    for (std::size_t l = 0; l < w.links.size(); ++l) {
+      const DampingLink& k = w.links[l];
+      const double* xi = &Vv[6 * static_cast<std::size_t>(k.i)];
+      const double* xj = &Vv[6 * static_cast<std::size_t>(k.j)];
+      const Vec3 vi{xi[0], xi[1], xi[2]}, wi{xi[3], xi[4], xi[5]}, vj{xj[0], xj[1], xj[2]}, wj{xj[3], xj[4], xj[5]};
+      for (int v = 0; v < 3; ++v) {
+        const DampingUnit& u = w.units[3 * l + static_cast<std::size_t>(v)];
+        f(k, u, (vj + cross(wj, u.rj)) - (vi + cross(wi, u.ri)));
+      }
+    }
+  };
+  auto impulse = [](const DampingUnit& u, const Vec3& du) {  // theta h D du: on i (on j, minus it)
+    return u.n * ((u.an - u.at) * dot(du, u.n)) + du * u.at;
+  };
+  each([&](std::size_t c) { B[c] = 0, X[c] = 0; });
+  each_unit(V0, [&](const DampingLink& k, const DampingUnit& u, const Vec3& du) {
+    const Vec3 f = impulse(u, du) / theta;
+    if (k.own_i) {
+      const Vec3 t = cross(u.ri, f);
+      double* y = &B[6 * static_cast<std::size_t>(k.i)];
+      y[0] += f.x, y[1] += f.y, y[2] += f.z, y[3] += t.x, y[4] += t.y, y[5] += t.z;
+    }
+    if (k.own_j) {
+      const Vec3 t = cross(u.rj, f);
+      double* y = &B[6 * static_cast<std::size_t>(k.j)];
+      y[0] -= f.x, y[1] -= f.y, y[2] -= f.z, y[3] -= t.x, y[4] -= t.y, y[5] -= t.z;
+    }
+  });
+  // Stopped when the preconditioned residual's norm is rtol times the right-hand side's:
+  // r^T P^-1 r <= rtol^2 b^T P^-1 b.
+  precondition(B, Z);
+  const double tol2 = settings_.damping_rtol * settings_.damping_rtol * inner(B, Z);
+  each([&](std::size_t c) { R[c] = B[c]; });  // from dV = 0
+  each([&](std::size_t c) { Pd[c] = Z[c]; });
+  double rz = inner(R, Z);
+  int it = 0;
+  for (; it < kMaxDampingIterations && rz > tol2; ++it) {
+    share(Pd);
+    apply(Pd, AP);
+    const double alpha = rz / inner(Pd, AP);
+    each([&](std::size_t c) { X[c] += alpha * Pd[c], R[c] -= alpha * AP[c]; });
+    precondition(R, Z);
+    const double rz_new = inner(R, Z);
+    const double beta = rz_new / rz;
+    rz = rz_new;
+    each([&](std::size_t c) { Pd[c] = Z[c] + beta * Pd[c]; });
+  }
+  if (rz > tol2)
+    throw CollectiveRunError("blast: the bond dashpots' solve (docs/theory.md B9a) did not reach blast.damping_rtol in " +
+                             std::to_string(kMaxDampingIterations) + " iterations at step " + std::to_string(steps_));
+  damping_iterations_ += it;
+  ++damping_solves_;
+  // The dashpots' impulses h D (theta du+ + (1 - theta) du) at V+ = V + dV, unit by unit, equal and
+  // opposite at the vertex: linear and angular momentum are kept to round-off whatever the residual.
+  each([&](std::size_t c) { X[c] += V0[c]; });
+  share(X);
+  each_unit(X, [&](const DampingLink& k, const DampingUnit& u, const Vec3& du_new) {
+    Vec3 du = du_new;
+    if (c_old > 0) {
+      const double* yi = &V0[6 * static_cast<std::size_t>(k.i)];
+      const double* yj = &V0[6 * static_cast<std::size_t>(k.j)];
+      du += ((Vec3{yj[0], yj[1], yj[2]} + cross(Vec3{yj[3], yj[4], yj[5]}, u.rj)) -
+             (Vec3{yi[0], yi[1], yi[2]} + cross(Vec3{yi[3], yi[4], yi[5]}, u.ri))) * c_old;
+    }
+    const Vec3 f = impulse(u, du);
+    const std::size_t i = static_cast<std::size_t>(k.i), j = static_cast<std::size_t>(k.j);
+    if (k.own_i) v_[i] += f / block_.mass[i], L_[i] += cross(u.ri, f);
+    if (k.own_j) v_[j] -= f / block_.mass[j], L_[j] -= cross(u.rj, f);
+  });
+  for (int e : owned) {
+    const std::size_t i = static_cast<std::size_t>(e);
+    w_[i] = spin(i, q_[i].unrotate(L_[i]));
+  }
+  new_epoch();
+}
+
+}  // namespace tessera
