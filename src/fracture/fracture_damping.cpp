@@ -324,9 +324,19 @@ void FractureSolver::damp_bonds(double h) {
     share(Pd);
     apply(Pd, AP);
     const double alpha = rz / inner(Pd, AP);
-    each([&](std::size_t c) { X[c] += alpha * Pd[c], R[c] -= alpha * AP[c]; });
-    precondition(R, Z);
-    const double rz_new = inner(R, Z);
+    // One pass: the update, the preconditioner and this element's share of r^T z.
+    ExactSum sum;
+    for (int e : owned) {
+      const std::size_t i = 6 * static_cast<std::size_t>(e);
+      for (int c = 0; c < 6; ++c) X[i + c] += alpha * Pd[i + c], R[i + c] -= alpha * AP[i + c];
+      for (int c = 0; c < 6; ++c) Z[i + c] = 0;
+      axpy6(w.inv_f[static_cast<std::size_t>(e)], &R[i], &Z[i]);
+      double t = 0;
+      for (int c = 0; c < 6; ++c) t += R[i + c] * Z[i + c];
+      sum.add(t);
+    }
+    if (decomp_.size() > 1) sum.all_reduce(decomp_.comm());
+    const double rz_new = sum.value();
     const double beta = rz_new / rz;
     rz = rz_new;
     each([&](std::size_t c) { Pd[c] = Z[c] + beta * Pd[c]; });
