@@ -186,7 +186,10 @@ void FractureSolver::damp_bonds(double h) {
   for (int e : owned) w.inv[static_cast<std::size_t>(e)] = inverse6(w.diag[static_cast<std::size_t>(e)]);
 
   std::vector<double>&X = w.x, &B = w.b, &R = w.r, &Z = w.z, &Pd = w.p, &AP = w.ap;
-  for (auto* v : {&X, &B, &R, &Z, &Pd, &AP}) v->assign(6 * n, 0.0);
+  // Sized once: the passes below write every owned entry and the exchanges every partner's, and
+  // nothing reads the rest.
+  for (auto* v : {&X, &B, &R, &Z, &Pd, &AP, &w.v0})
+    if (v->size() != 6 * n) v->assign(6 * n, 0.0);
   // Y = (M + h C) X on the owned elements, each element's terms in the same order on any rank
   // count (its diagonal block, then its links in bond order); X's partners' entries are current.
   // Each block product as six axpys over rows (the diagonal blocks are symmetric; a link's block
@@ -275,7 +278,6 @@ void FractureSolver::damp_bonds(double h) {
   // blocks err relative to the change, not to the velocities).
   const double theta = settings_.damping_theta, c_old = (1 - theta) / theta;
   std::vector<double>& V0 = w.v0;
-  V0.assign(6 * n, 0.0);
   for (int e : owned) {
     const std::size_t i = static_cast<std::size_t>(e);
     const double x[6] = {v_[i].x, v_[i].y, v_[i].z, w_[i].x, w_[i].y, w_[i].z};

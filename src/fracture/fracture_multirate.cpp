@@ -105,7 +105,7 @@ void FractureSolver::assign_levels() {
     // Never finer than B9's bound (every face bonded and pressed by all its spheres), which the
     // explicit scheme's levels take: a count of pairs that may touch can exceed it.
     for (std::size_t e = 0; e < n; ++e)
-      level_[e] = level_for(settings_.stability_factor * std::max(acting_limit(e, pairs[e]), element_limit(e)));
+      level_[e] = level_for(settings_.stability_factor * std::max(acting_limit(e, pairs[e]), b9_limit_[e]));
     if (decomp_.size() > 1)
       MPI_Allreduce(MPI_IN_PLACE, level_.data(), static_cast<int>(n), MPI_INT, MPI_MAX, decomp_.comm());
     return;

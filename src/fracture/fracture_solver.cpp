@@ -182,9 +182,11 @@ void FractureSolver::choose_steps() {
     // With the bond dashpots implicit (B9a), the limits of the springs that act: here every bond.
     const bool acting = settings_.implicit_damping && settings_.damping;
     std::vector<double> limit(n);
+    b9_limit_.assign(acting ? n : 0, 0.0);
     double largest = 0;
     for (std::size_t e = 0; e < n; ++e) {
       limit[e] = settings_.stability_factor * (acting ? acting_limit(e, 0) : element_limit(e));
+      if (acting) b9_limit_[e] = element_limit(e);
       if (limit[e] < 1e299) largest = std::max(largest, limit[e]);
     }
     if (!settings_.time_step) dt_ = largest;

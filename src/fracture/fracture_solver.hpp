@@ -341,6 +341,7 @@ class FractureSolver {
   std::vector<double> reach_;  // each element's farthest vertex from its centroid
   // Per element and local face: the largest lever |e_a x r|^2 about each principal axis, and the area.
   std::vector<std::array<std::array<double, 4>, 4>> face_k_;
+  std::vector<double> b9_limit_;  // B9a's levels: each element's B9 limit, the finest they take
   std::vector<double> moved_;  // each element's travel since its spheres were last searched
   // B7a (stability levels): each element's travel so far, a bound summed over every change of its
   // pose on this rank (the pairs' budgets are in pairs_).
