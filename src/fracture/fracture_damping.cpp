@@ -1,18 +1,17 @@
 // SPDX-License-Identifier: MIT
-// The bond dashpots of every intact bond together, backward Euler (docs/theory.md B9a).
+// The bond dashpots of every intact bond together, by the theta method (docs/theory.md B9a).
 //
 // Over a step h the dashpots alone change the elements' velocities V = (v, w) by
-//   M dV/dt = -C V,   backward Euler:   (M + h C) V+ = M V,
+//   M dV/dt = -C V,   theta method:   (M + theta h C) dV = -h C V,   V+ = V + dV,
 // with M each element's mass and world inertia and C the sum over the bonds' vertex units of
 // J^T D J: J maps the two elements' velocities to the vertex's relative velocity
 // du = (v_j + w_j x r_j) - (v_i + w_i x r_i), D = (A/3) (c_n n n^T + c_s (1 - n n^T)) in the
 // master face's frame (B2). The system is solved by conjugate gradients preconditioned by each
-// element's 6 x 6 block; the impulses -h D du+ at the solution are then applied pairwise, equal and
-// opposite at the vertex, so linear and angular momentum are kept to round-off whatever the solve's
-// residual. Elements' positions are those of the call (the dashpots' frame does not turn in h).
+// element's 6 x 6 block; the impulses h D (theta du+ + (1 - theta) du) are then made unit by unit,
+// equal and opposite at the vertex, so momentum is kept to round-off whatever the solve's residual.
+// Elements' positions are those of the call (the dashpots' frame does not turn in h).
 #include <algorithm>
 #include <cmath>
-#include <span>
 
 #include "core/errors.hpp"
 #include "core/exact_sum.hpp"
@@ -23,7 +22,6 @@ namespace tessera {
 namespace {
 
 using Block6 = std::array<double, 36>;  // a 6 x 6 block, row-major
-
 
 // The inverse of a symmetric positive definite 6 x 6 block (the preconditioner applies it as a
 // product): its Cholesky factor L, L's inverse by columns, then L^-T L^-1. Six divisions and six
@@ -109,7 +107,7 @@ void FractureSolver::damp_bonds(double h) {
     w.recv_elements[at].push_back(e);
   }
 
-  // The matrix M + h C in 6 x 6 blocks: each owned element's diagonal block (its mass and world
+  // The matrix M + theta h C in 6 x 6 blocks: each owned element's diagonal block (its mass and world
   // inertia R diag(I) R^T, plus J^T D J of its units), each link's block (rows: the master's
   // velocities, columns: the slave's). A unit's J is [1, X] for the slave and -[1, X] for the
   // master, X = -[r]x the map w -> w x r; with D = a' n n^T + a_t 1 (a' = a_n - a_t) and s = r x n
@@ -190,7 +188,7 @@ void FractureSolver::damp_bonds(double h) {
   // nothing reads the rest.
   for (auto* v : {&X, &B, &R, &Z, &Pd, &AP, &w.v0})
     if (v->size() != 6 * n) v->assign(6 * n, 0.0);
-  // Y = (M + h C) X on the owned elements, each element's terms in the same order on any rank
+  // Y = (M + theta h C) X on the owned elements, each element's terms in the same order on any rank
   // count (its diagonal block, then its links in bond order); X's partners' entries are current.
   // Each block product as six axpys over rows (the diagonal blocks are symmetric; a link's block
   // is kept transposed too), so that the six rows are added at once; the solve reads the blocks in
