@@ -113,7 +113,7 @@ void FractureSolver::damp_bonds(double h) {
   // master, X = -[r]x the map w -> w x r; with D = a' n n^T + a_t 1 (a' = a_n - a_t) and s = r x n
   // (= X^T n):  X_a^T D = a' s_a n^T + a_t X_a^T,  X_a^T D X_b = a' s_a s_b^T + a_t ((r_a . r_b) 1 - r_b r_a^T).
   const std::size_t n = block_.size();
-  w.diag.resize(n), w.inv.resize(n);
+  w.diag.resize(n);
   for (int e : owned) {
     const std::size_t i = static_cast<std::size_t>(e);
     const Pose& p = pose(i);
@@ -181,7 +181,6 @@ void FractureSolver::damp_bonds(double h) {
         O[6 * p + q] = -vv, O[6 * p + 3 + q] = -vw_j, O[6 * (3 + p) + q] = -wv_i, O[6 * (3 + p) + 3 + q] = -ww_ij;
       }
   }
-  for (int e : owned) w.inv[static_cast<std::size_t>(e)] = inverse6(w.diag[static_cast<std::size_t>(e)]);
 
   std::vector<double>&X = w.x, &B = w.b, &R = w.r, &Z = w.z, &Pd = w.p, &AP = w.ap;
   // Sized once: the passes below write every owned entry and the exchanges every partner's, and
@@ -204,7 +203,7 @@ void FractureSolver::damp_bonds(double h) {
   }
   w.diag_f.resize(n), w.inv_f.resize(n);
   for (int e : owned) narrow(w.diag[static_cast<std::size_t>(e)], w.diag_f[static_cast<std::size_t>(e)]),
-                      narrow(w.inv[static_cast<std::size_t>(e)], w.inv_f[static_cast<std::size_t>(e)]);
+                      narrow(inverse6(w.diag[static_cast<std::size_t>(e)]), w.inv_f[static_cast<std::size_t>(e)]);
   auto axpy6 = [](const Block6f& M, const double* x, double* y) {
     for (int c = 0; c < 6; ++c) {
       const double xc = x[c];
