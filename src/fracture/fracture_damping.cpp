@@ -128,7 +128,12 @@ void FractureSolver::damp_bonds(double h) {
   }
   // A link's three units share n, a' and a_t, and s = r x n is linear in r: the blocks need only
   // the sums over the vertices of r, of the products s s^T and r r^T, and of the dot products.
-  w.off.resize(w.links.size());
+  // The solve reads the blocks in single precision, each link's once (half the memory; the impulses
+  // below use the units themselves).
+  auto narrow = [](const Block6& a, Block6f& b) {
+    for (int k = 0; k < 36; ++k) b[static_cast<std::size_t>(k)] = static_cast<float>(a[static_cast<std::size_t>(k)]);
+  };
+  w.off_f.resize(w.links.size());
   for (std::size_t l = 0; l < w.links.size(); ++l) {
     const DampingLink& k = w.links[l];
     const DampingUnit* u = &w.units[3 * l];
@@ -157,7 +162,7 @@ void FractureSolver::damp_bonds(double h) {
       const double m[3][3] = {{0, r[2], -r[1]}, {-r[2], 0, r[0]}, {r[1], -r[0], 0}};
       return m[p][q];
     };
-    Block6& O = w.off[l];
+    Block6 O;
     Block6* Di = k.own_i ? &w.diag[static_cast<std::size_t>(k.i)] : nullptr;
     Block6* Dj = k.own_j ? &w.diag[static_cast<std::size_t>(k.j)] : nullptr;
     for (int p = 0; p < 3; ++p)
@@ -180,6 +185,7 @@ void FractureSolver::damp_bonds(double h) {
         }
         O[6 * p + q] = -vv, O[6 * p + 3 + q] = -vw_j, O[6 * (3 + p) + q] = -wv_i, O[6 * (3 + p) + 3 + q] = -ww_ij;
       }
+    narrow(O, w.off_f[l]);
   }
 
   std::vector<double>&X = w.x, &B = w.b, &R = w.r, &Z = w.z, &Pd = w.p, &AP = w.ap;
@@ -189,18 +195,9 @@ void FractureSolver::damp_bonds(double h) {
     if (v->size() != 6 * n) v->assign(6 * n, 0.0);
   // Y = (M + theta h C) X on the owned elements, each element's terms in the same order on any rank
   // count (its diagonal block, then its links in bond order); X's partners' entries are current.
-  // Each block product as six axpys over rows (the diagonal blocks are symmetric; a link's block
-  // is kept transposed too), so that the six rows are added at once; the solve reads the blocks in
-  // single precision (it is memory-bound; the impulses below use the units themselves).
-  auto narrow = [](const Block6& a, Block6f& b) {
-    for (int k = 0; k < 36; ++k) b[static_cast<std::size_t>(k)] = static_cast<float>(a[static_cast<std::size_t>(k)]);
-  };
-  w.off_f.resize(w.links.size()), w.off_tf.resize(w.links.size());
-  for (std::size_t l = 0; l < w.links.size(); ++l) {
-    narrow(w.off[l], w.off_f[l]);
-    for (int a = 0; a < 6; ++a)
-      for (int c = 0; c < 6; ++c) w.off_tf[l][static_cast<std::size_t>(6 * c + a)] = w.off_f[l][static_cast<std::size_t>(6 * a + c)];
-  }
+  // A diagonal block's product as six axpys over its rows (it is symmetric), so that the six rows
+  // are added at once; a link's block, stored once, gives its master's rows by six row products
+  // and its slave's by six axpys over the same rows.
   w.diag_f.resize(n), w.inv_f.resize(n);
   for (int e : owned) narrow(w.diag[static_cast<std::size_t>(e)], w.diag_f[static_cast<std::size_t>(e)]),
                       narrow(inverse6(w.diag[static_cast<std::size_t>(e)]), w.inv_f[static_cast<std::size_t>(e)]);
@@ -219,8 +216,17 @@ void FractureSolver::damp_bonds(double h) {
     for (std::size_t l = 0; l < w.links.size(); ++l) {
       const DampingLink& k = w.links[l];
       const std::size_t i = 6 * static_cast<std::size_t>(k.i), j = 6 * static_cast<std::size_t>(k.j);
-      if (k.own_i) axpy6(w.off_tf[l], &Xv[j], &Y[i]);  // rows of B^T: B X_j
-      if (k.own_j) axpy6(w.off_f[l], &Xv[i], &Y[j]);    // rows of B: B^T X_i
+      const Block6f& O = w.off_f[l];
+      if (k.own_i) {  // B X_j: six row products
+        const double* x = &Xv[j];
+        double* y = &Y[i];
+        for (int a = 0; a < 6; ++a) {
+          double t = 0;
+          for (int c = 0; c < 6; ++c) t += static_cast<double>(O[static_cast<std::size_t>(6 * a + c)]) * x[c];
+          y[a] += t;
+        }
+      }
+      if (k.own_j) axpy6(O, &Xv[i], &Y[j]);  // B^T X_i: six axpys over B's rows
     }
   };
   // The partners' entries of a vector, from their owners.

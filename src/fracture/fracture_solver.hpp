@@ -396,8 +396,8 @@ class FractureSolver {
   struct DampingWork {
     std::vector<DampingUnit> units;  // three per link
     std::vector<DampingLink> links;
-    std::vector<Block6> diag, off;  // per element (owned); per link
-    std::vector<Block6f> diag_f, inv_f, off_f, off_tf;  // single precision: those, the diagonal's inverse, the links' transposed
+    std::vector<Block6> diag;  // per element (owned)
+    std::vector<Block6f> diag_f, inv_f, off_f;  // single precision: those, their inverses, per link
     std::vector<double> x, b, r, z, p, ap;
     std::vector<double> v0;           // theta < 1: the velocities before
     std::vector<std::array<int, 2>> sent, read;
