@@ -141,13 +141,40 @@ void FractureSolver::set_sunk(ListedPair& p, double depth) {
     sunk_.erase({ka, kb});
 }
 
-void FractureSolver::sort_pairs() {
+void FractureSolver::keep_sunk() {
+  // Before the list changes: the pairs that opened leave the map, the others with a depth set it.
+  for (const std::size_t k : opened_)
+    sunk_.erase({spheres_[static_cast<std::size_t>(pairs_[k].first)].key, spheres_[static_cast<std::size_t>(pairs_[k].second)].key});
+  opened_.clear();
+  for (const ListedPair& p : pairs_)
+    if (p.sunk > 0) sunk_[{spheres_[static_cast<std::size_t>(p.first)].key, spheres_[static_cast<std::size_t>(p.second)].key}] = p.sunk;
+}
+
+std::map<std::pair<long, long>, double> FractureSolver::current_sunk() const {
+  // The map as keep_sunk would leave it now.
+  std::map<std::pair<long, long>, double> m = sunk_;
+  for (const ListedPair& p : pairs_) {
+    const std::pair<long, long> key{spheres_[static_cast<std::size_t>(p.first)].key, spheres_[static_cast<std::size_t>(p.second)].key};
+    if (p.sunk > 0)
+      m[key] = p.sunk;
+    else
+      m.erase(key);
+  }
+  return m;
+}
+
+void FractureSolver::sort_pairs(std::size_t sorted) {
   // Canonical order (sphere keys), whatever order the faces broke in or a restart re-created them.
-  std::sort(pairs_.begin(), pairs_.end(), [&](const auto& p, const auto& r) {
+  // The first `sorted` pairs are in that order already (those a refresh kept): the rest are sorted
+  // and merged in.
+  const auto by_keys = [&](const auto& p, const auto& r) {
     const auto& S = spheres_;
     return std::pair{S[static_cast<std::size_t>(p.first)].key, S[static_cast<std::size_t>(p.second)].key} <
            std::pair{S[static_cast<std::size_t>(r.first)].key, S[static_cast<std::size_t>(r.second)].key};
-  });
+  };
+  const auto mid = pairs_.begin() + static_cast<std::ptrdiff_t>(std::min(sorted, pairs_.size()));
+  std::sort(mid, pairs_.end(), by_keys);
+  std::inplace_merge(pairs_.begin(), mid, pairs_.end(), by_keys);
 }
 
 void FractureSolver::build_list() {
@@ -184,7 +211,7 @@ void FractureSolver::extend_list() {
   // now (the grid holds each sphere where its element was last searched, within skin/2 of where it
   // is: the grid's pad covers it), and the two elements' older spheres against each other.
   // Safe until the next rebuild: from now on each element moves at most skin/2 - what it has moved.
-  const std::size_t n = spheres_.size();
+  const std::size_t n = spheres_.size(), sorted = pairs_.size();
   for (std::size_t a = listed_spheres_; a < n; ++a) {
     const Vec3 p = sphere_position(a);
     near_sphere(a, p, false, [&](int b) { consider_pair(static_cast<int>(a), b, p, sphere_position(static_cast<std::size_t>(b)), 0, true); });
@@ -204,7 +231,7 @@ void FractureSolver::extend_list() {
   // elements cannot exist (they share one face).
   unlisted_bonds_.clear();
   listed_spheres_ = n;
-  sort_pairs();
+  sort_pairs(sorted);
   count_pairs();
 }
 
@@ -231,6 +258,7 @@ void FractureSolver::refresh_list() {
   std::erase_if(pairs_, [&](const ListedPair& p) {
     return stale_[static_cast<std::size_t>(p.ea)] || stale_[static_cast<std::size_t>(p.eb)];
   });
+  const std::size_t sorted = pairs_.size();
   // The grid holds every sphere where its element was last searched (within skin/2 of where it is
   // now, 2 skins of pad with the margin below): the searched elements' spheres move to where they are.
   for (std::size_t e = 0; e < block_.size(); ++e) {
@@ -250,11 +278,12 @@ void FractureSolver::refresh_list() {
       });
     }
   }
-  sort_pairs();
+  sort_pairs(sorted);
   count_pairs();
 }
 
 void FractureSolver::update_list(double horizon) {
+  keep_sunk();
   // Never built, spheres larger than the cells allow, or most elements stale: a full build.
   if (build_x_.empty() || max_radius_ > 1.5 * cell_radius_) return build_list();  // the grid's r_top
   if (listed_spheres_ < spheres_.size()) extend_list();
@@ -275,7 +304,10 @@ PairForce FractureSolver::contact_force(std::size_t pair, const Pose& pa, const 
   out.gap = -overlap;
   // B7b: a pair born overlapping pushes only beyond its sunk depth, which follows it as it opens.
   ListedPair& lp = pairs_[pair];
-  if (lp.sunk > 0 && overlap < lp.sunk) set_sunk(lp, std::max(0.0, overlap));
+  if (lp.sunk > 0 && overlap < lp.sunk) {  // the map follows at keep_sunk
+    lp.sunk = std::max(0.0, overlap);
+    if (lp.sunk == 0) opened_.push_back(pair);
+  }
   const double depth = overlap - lp.sunk;
   if (depth <= 0 || dist == 0) return out;
   const double k = settings_.contact_stiffness, c = settings_.damping ? settings_.contact_damping : 0;

@@ -389,7 +389,7 @@ void FractureSolver::restore(const std::vector<Vec3>& x, const std::vector<Quate
   bond_state_ = bonds;
   F_ = F, T_ = T;
   spheres_.clear(), pairs_.clear(), unlisted_bonds_.clear();
-  sunk_.clear();
+  sunk_.clear(), opened_.clear();
   born_overlaps_ = decomp_.rank() == 0 ? list.born_overlaps : 0;  // the sum over the ranks
   deepest_born_ = list.deepest_born_overlap;
   element_spheres_.assign(block_.size(), {});
@@ -459,7 +459,7 @@ std::vector<std::pair<std::pair<long, long>, double>> FractureSolver::all_sunk()
   // B7b: every rank's sunk pairs, each once (the ranks that hold a pair hold the same depth).
   std::vector<long> keys;
   std::vector<double> depths;
-  for (const auto& [k, d] : sunk_) keys.insert(keys.end(), {k.first, k.second}), depths.push_back(d);
+  for (const auto& [k, d] : current_sunk()) keys.insert(keys.end(), {k.first, k.second}), depths.push_back(d);
   const std::vector<long> all_keys = all_gather_concat(decomp_.comm(), keys);
   const std::vector<double> all_depths = all_gather_concat(decomp_.comm(), depths);
   std::map<std::pair<long, long>, double> merged;

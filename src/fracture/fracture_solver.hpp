@@ -220,6 +220,7 @@ class FractureSolver {
   void assign_levels();
   void advance_to(std::size_t e, double t);  // drift (x, q) from its clock to t
   void prefetch_bond(std::size_t b) const;  // a cache hint: the bond's geometry and state
+  void prefetch_pair(std::size_t p) const;  // a cache hint: the pair's two spheres
   // B7a: adds to travel_[e] how far any point of element e can have moved since its state
   // (x, q) was (x_old, q_old): the centroid's move and its farthest vertex's chord.
   void add_travel(std::size_t e, const Vec3& x_old, const Quaternion& q_old) {
@@ -268,7 +269,7 @@ class FractureSolver {
   // B7b: the pairs of two elements whose bond is in unlisted_bonds_ or with a sphere not yet listed.
   bool born_at_release(int a, int b) const;
   std::vector<std::pair<std::pair<long, long>, double>> all_sunk() const;  // collective, by key
-  void sort_pairs();
+  void sort_pairs(std::size_t sorted = 0);  // the first `sorted` pairs are in order already
   void count_pairs();  // collective: listed_pairs_ of every element
   // The list's cells (sphere_grid.hpp): every sphere where its element was last searched (build_x_,
   // build_q_); spheres up to 1.5 times the largest at the last build (the faces released until the
@@ -324,6 +325,12 @@ class FractureSolver {
   std::vector<ListedPair> pairs_;
   // B7b: a pair's sunk depth went to `depth` (0: an ordinary pair again), on every rank that holds it.
   void set_sunk(ListedPair& p, double depth);
+  // B7b's depths as the evaluations leave them: a listed pair's `sunk` only falls, and the map
+  // below takes the listed pairs' depths (keep_sunk) before the list changes or is read by key,
+  // not at each evaluation. opened_: the pairs (indices in pairs_) whose depth reached 0 since.
+  void keep_sunk();
+  std::map<std::pair<long, long>, double> current_sunk() const;
+  std::vector<std::size_t> opened_;
   // B7a: a pair whose elements have not together travelled the gap it had when last evaluated
   // cannot touch (its force is zero: skipping it gives the same bits); note_gap records that gap.
   bool may_touch(const ListedPair& p, std::size_t a, std::size_t b) const { return travel_[a] + travel_[b] >= p.budget; }
