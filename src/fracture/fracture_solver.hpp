@@ -71,7 +71,7 @@ struct FractureSettings {
   int max_level = 30;
   bool damping = true;               // false: no dashpots (energy tests)
   bool implicit_damping = false;     // B9a: the bond dashpots all together, backward Euler
-  double damping_rtol = 1e-4;        // B9a: the solve's residual over its right-hand side (the change)
+  double damping_rtol = 1e-3;        // B9a: the solve's residual over its right-hand side (the change)
   double damping_theta = 0.5;        // B9a: 1/2 the trapezoidal rule, 1 backward Euler
   bool skip_apart = true;            // B7a: pairs that cannot touch are not evaluated (false: tests)
   bool relax_born_overlaps = true;   // B7b: a pair listed at a release starts from its overlap then
