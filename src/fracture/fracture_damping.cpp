@@ -7,11 +7,13 @@
 // J^T D J: J maps the two elements' velocities to the vertex's relative velocity
 // du = (v_j + w_j x r_j) - (v_i + w_i x r_i), D = (A/3) (c_n n n^T + c_s (1 - n n^T)) in the
 // master face's frame (B2). The system is solved by conjugate gradients preconditioned by each
-// element's 6 x 6 block; the impulses h D (theta du+ + (1 - theta) du) are then made unit by unit,
-// equal and opposite at the vertex, so momentum is kept to round-off whatever the solve's residual.
+// element's 6 x 6 block (as a change of variables, below); the impulses h D (theta du+ +
+// (1 - theta) du) are then made unit by unit, equal and opposite at the vertex, so momentum is kept
+// to round-off whatever the solve's residual.
 // Elements' positions are those of the call (the dashpots' frame does not turn in h).
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "core/errors.hpp"
 #include "core/exact_sum.hpp"
@@ -23,10 +25,9 @@ namespace {
 
 using Block6 = std::array<double, 36>;  // a 6 x 6 block, row-major
 
-// The inverse of a symmetric positive definite 6 x 6 block (the preconditioner applies it as a
-// product): its Cholesky factor L, L's inverse by columns, then L^-T L^-1. Six divisions and six
-// square roots, none in a chain of substitutions.
-Block6 inverse6(const Block6& a) {
+// The inverse of the Cholesky factor L (D = L L^T) of a symmetric positive definite 6 x 6 block,
+// lower triangular, row-major (zeros above the diagonal). Six divisions and six square roots.
+Block6 cholesky_inverse(const Block6& a) {
   double l[6][6] = {}, d[6];  // d: 1 / L_ii
   for (int j = 0; j < 6; ++j) {
     double s = a[6 * j + j];
@@ -39,23 +40,16 @@ Block6 inverse6(const Block6& a) {
       l[i][j] = t * d[j];
     }
   }
-  double m[6][6] = {};  // L^-1, lower triangular
+  Block6 m{};  // L^-1
   for (int j = 0; j < 6; ++j) {
-    m[j][j] = d[j];
+    m[6 * j + j] = d[j];
     for (int i = j + 1; i < 6; ++i) {
       double t = 0;
-      for (int k = j; k < i; ++k) t -= l[i][k] * m[k][j];
-      m[i][j] = t * d[i];
+      for (int k = j; k < i; ++k) t -= l[i][k] * m[6 * k + j];
+      m[6 * i + j] = t * d[i];
     }
   }
-  Block6 inv;
-  for (int r = 0; r < 6; ++r)
-    for (int c = r; c < 6; ++c) {
-      double t = 0;
-      for (int k = c; k < 6; ++k) t += m[k][r] * m[k][c];
-      inv[6 * r + c] = inv[6 * c + r] = t;
-    }
-  return inv;
+  return m;
 }
 
 }  // namespace
@@ -128,12 +122,7 @@ void FractureSolver::damp_bonds(double h) {
   }
   // A link's three units share n, a' and a_t, and s = r x n is linear in r: the blocks need only
   // the sums over the vertices of r, of the products s s^T and r r^T, and of the dot products.
-  // The solve reads the blocks in single precision, each link's once (half the memory; the impulses
-  // below use the units themselves).
-  auto narrow = [](const Block6& a, Block6f& b) {
-    for (int k = 0; k < 36; ++k) b[static_cast<std::size_t>(k)] = static_cast<float>(a[static_cast<std::size_t>(k)]);
-  };
-  w.off_f.resize(w.links.size());
+  w.off.resize(w.links.size());
   for (std::size_t l = 0; l < w.links.size(); ++l) {
     const DampingLink& k = w.links[l];
     const DampingUnit* u = &w.units[3 * l];
@@ -162,7 +151,7 @@ void FractureSolver::damp_bonds(double h) {
       const double m[3][3] = {{0, r[2], -r[1]}, {-r[2], 0, r[0]}, {r[1], -r[0], 0}};
       return m[p][q];
     };
-    Block6 O;
+    Block6& O = w.off[l];
     Block6* Di = k.own_i ? &w.diag[static_cast<std::size_t>(k.i)] : nullptr;
     Block6* Dj = k.own_j ? &w.diag[static_cast<std::size_t>(k.j)] : nullptr;
     for (int p = 0; p < 3; ++p)
@@ -185,22 +174,77 @@ void FractureSolver::damp_bonds(double h) {
         }
         O[6 * p + q] = -vv, O[6 * p + 3 + q] = -vw_j, O[6 * (3 + p) + q] = -wv_i, O[6 * (3 + p) + 3 + q] = -ww_ij;
       }
-    narrow(O, w.off_f[l]);
   }
 
-  std::vector<double>&X = w.x, &B = w.b, &R = w.r, &Z = w.z, &Pd = w.p, &AP = w.ap;
+  // The solve in the blocks' own scale (block Jacobi as a change of variables): with each diagonal
+  // block D_i = L_i L_i^T, CG on L^-1 (M + theta h C) L^-T, whose diagonal blocks are the identity
+  // and whose link blocks are L_i^-1 B L_j^-T, for y = L^T dV from L^-1 b. Its iterates are those of
+  // CG preconditioned by the inverse blocks, and it reads no diagonal block or inverse: the link
+  // blocks, in single precision, are all the matrix it reads (the impulses below use the units).
+  std::vector<double>&X = w.x, &B = w.b, &R = w.r, &Pd = w.p, &AP = w.ap;
   // Sized once: the passes below write every owned entry and the exchanges every partner's, and
   // nothing reads the rest.
-  for (auto* v : {&X, &B, &R, &Z, &Pd, &AP, &w.v0})
+  for (auto* v : {&X, &B, &R, &Pd, &AP, &w.v0})
     if (v->size() != 6 * n) v->assign(6 * n, 0.0);
-  // Y = (M + theta h C) X on the owned elements, each element's terms in the same order on any rank
-  // count (its diagonal block, then its links in bond order); X's partners' entries are current.
-  // A diagonal block's product as six axpys over its rows (it is symmetric), so that the six rows
-  // are added at once; a link's block, stored once, gives its master's rows by six row products
-  // and its slave's by six axpys over the same rows.
-  w.diag_f.resize(n), w.inv_f.resize(n);
-  for (int e : owned) narrow(w.diag[static_cast<std::size_t>(e)], w.diag_f[static_cast<std::size_t>(e)]),
-                      narrow(inverse6(w.diag[static_cast<std::size_t>(e)]), w.inv_f[static_cast<std::size_t>(e)]);
+  if (w.linv.size() != kTri * n) w.linv.assign(kTri * n, 0.0);
+  // Each owned element's L^-1 (its 21 lower entries by rows); the partners' from their owners.
+  for (int e : owned) {
+    const Block6 m = cholesky_inverse(w.diag[static_cast<std::size_t>(e)]);
+    double* t = &w.linv[kTri * static_cast<std::size_t>(e)];
+    for (int a = 0; a < 6; ++a)
+      for (int c = 0; c <= a; ++c) *t++ = m[static_cast<std::size_t>(6 * a + c)];
+  }
+  // The partners' entries of a vector of `width` numbers per element, from their owners.
+  auto share = [&](std::vector<double>& V, std::size_t width) {
+    const std::size_t m = w.neighbours.size();
+    if (m == 0) return;
+    w.send.resize(m), w.recv.resize(m);
+    w.requests.assign(2 * m, MPI_REQUEST_NULL);
+    for (std::size_t k = 0; k < m; ++k) {
+      w.recv[k].resize(width * w.recv_elements[k].size());
+      MPI_Irecv(w.recv[k].data(), static_cast<int>(w.recv[k].size()), MPI_DOUBLE, w.neighbours[k], kDampingTag,
+                decomp_.comm(), &w.requests[k]);
+    }
+    for (std::size_t k = 0; k < m; ++k) {
+      w.send[k].clear();
+      for (int e : w.send_elements[k])
+        w.send[k].insert(w.send[k].end(), &V[width * static_cast<std::size_t>(e)],
+                         &V[width * static_cast<std::size_t>(e)] + width);
+      MPI_Isend(w.send[k].data(), static_cast<int>(w.send[k].size()), MPI_DOUBLE, w.neighbours[k], kDampingTag,
+                decomp_.comm(), &w.requests[m + k]);
+    }
+    MPI_Waitall(static_cast<int>(w.requests.size()), w.requests.data(), MPI_STATUSES_IGNORE);
+    for (std::size_t k = 0; k < m; ++k)
+      for (std::size_t a = 0; a < w.recv_elements[k].size(); ++a)
+        std::copy(&w.recv[k][width * a], &w.recv[k][width * a] + width,
+                  &V[width * static_cast<std::size_t>(w.recv_elements[k][a])]);
+  };
+  share(w.linv, kTri);
+  // Each link's block scaled, L_i^-1 B L_j^-T (on both ranks of a cross link from the same numbers),
+  // then narrowed.
+  w.off_f.resize(w.links.size());
+  for (std::size_t l = 0; l < w.links.size(); ++l) {
+    const double* li = &w.linv[kTri * static_cast<std::size_t>(w.links[l].i)];
+    const double* lj = &w.linv[kTri * static_cast<std::size_t>(w.links[l].j)];
+    const Block6& O = w.off[l];
+    double T[36];  // L_i^-1 B: row a from B's rows 0..a
+    for (int a = 0, t = 0; a < 6; ++a, t += a) {
+      for (int c = 0; c < 6; ++c) T[6 * a + c] = 0;
+      for (int q = 0; q <= a; ++q)
+        for (int c = 0; c < 6; ++c) T[6 * a + c] += li[t + q] * O[static_cast<std::size_t>(6 * q + c)];
+    }
+    Block6f& F = w.off_f[l];
+    for (int a = 0; a < 6; ++a)
+      for (int b = 0, t = 0; b < 6; ++b, t += b) {  // (T L_j^-T)_ab = sum_{c <= b} T_ac (L_j^-1)_bc
+        double v = 0;
+        for (int c = 0; c <= b; ++c) v += T[6 * a + c] * lj[t + c];
+        F[static_cast<std::size_t>(6 * a + b)] = static_cast<float>(v);
+      }
+  }
+  // Y = A X on the owned elements, each element's terms in the same order on any rank count (its
+  // identity block, then its links in bond order); X's partners' entries are current. A link's
+  // block, stored once, gives its master's rows by six row products and its slave's by six axpys
+  // over the same rows.
   auto axpy6 = [](const Block6f& M, const double* x, double* y) {
     for (int c = 0; c < 6; ++c) {
       const double xc = x[c];
@@ -210,8 +254,7 @@ void FractureSolver::damp_bonds(double h) {
   auto apply = [&](const std::vector<double>& Xv, std::vector<double>& Y) {
     for (int e : owned) {
       const std::size_t i = 6 * static_cast<std::size_t>(e);
-      for (int a = 0; a < 6; ++a) Y[i + a] = 0;
-      axpy6(w.diag_f[static_cast<std::size_t>(e)], &Xv[i], &Y[i]);
+      for (int a = 0; a < 6; ++a) Y[i + a] = Xv[i + a];
     }
     for (std::size_t l = 0; l < w.links.size(); ++l) {
       const DampingLink& k = w.links[l];
@@ -229,29 +272,6 @@ void FractureSolver::damp_bonds(double h) {
       if (k.own_j) axpy6(O, &Xv[i], &Y[j]);  // B^T X_i: six axpys over B's rows
     }
   };
-  // The partners' entries of a vector, from their owners.
-  auto share = [&](std::vector<double>& V) {
-    const std::size_t m = w.neighbours.size();
-    if (m == 0) return;
-    w.send.resize(m), w.recv.resize(m);
-    w.requests.assign(2 * m, MPI_REQUEST_NULL);
-    for (std::size_t k = 0; k < m; ++k) {
-      w.recv[k].resize(6 * w.recv_elements[k].size());
-      MPI_Irecv(w.recv[k].data(), static_cast<int>(w.recv[k].size()), MPI_DOUBLE, w.neighbours[k], kDampingTag,
-                decomp_.comm(), &w.requests[k]);
-    }
-    for (std::size_t k = 0; k < m; ++k) {
-      w.send[k].clear();
-      for (int e : w.send_elements[k])
-        w.send[k].insert(w.send[k].end(), &V[6 * static_cast<std::size_t>(e)], &V[6 * static_cast<std::size_t>(e)] + 6);
-      MPI_Isend(w.send[k].data(), static_cast<int>(w.send[k].size()), MPI_DOUBLE, w.neighbours[k], kDampingTag,
-                decomp_.comm(), &w.requests[m + k]);
-    }
-    MPI_Waitall(static_cast<int>(w.requests.size()), w.requests.data(), MPI_STATUSES_IGNORE);
-    for (std::size_t k = 0; k < m; ++k)
-      for (std::size_t a = 0; a < w.recv_elements[k].size(); ++a)
-        std::copy(&w.recv[k][6 * a], &w.recv[k][6 * a] + 6, &V[6 * static_cast<std::size_t>(w.recv_elements[k][a])]);
-  };
   // An inner product over the owned elements: each element's six terms in order, then an exact sum
   // over the elements and the ranks, so every rank count takes the same steps to the same bits.
   auto inner = [&](const std::vector<double>& a, const std::vector<double>& b) {
@@ -264,13 +284,6 @@ void FractureSolver::damp_bonds(double h) {
     }
     if (decomp_.size() > 1) sum.all_reduce(decomp_.comm());
     return sum.value();
-  };
-  auto precondition = [&](const std::vector<double>& from, std::vector<double>& to) {
-    for (int e : owned) {
-      const std::size_t i = 6 * static_cast<std::size_t>(e);
-      for (int a = 0; a < 6; ++a) to[i + a] = 0;
-      axpy6(w.inv_f[static_cast<std::size_t>(e)], &from[i], &to[i]);  // symmetric
-    }
   };
   auto each = [&](auto&& f) {
     for (int e : owned)
@@ -286,7 +299,7 @@ void FractureSolver::damp_bonds(double h) {
     const double x[6] = {v_[i].x, v_[i].y, v_[i].z, w_[i].x, w_[i].y, w_[i].z};
     std::copy(x, x + 6, &V0[6 * i]);
   }
-  share(V0);
+  share(V0, 6);
   // f(i, j, du, u) for every unit: du its relative velocity at the vector's values.
   auto each_unit = [&](const std::vector<double>& Vv, auto&& f) {
     for (std::size_t l = 0; l < w.links.size(); ++l) {
@@ -317,44 +330,62 @@ void FractureSolver::damp_bonds(double h) {
       y[0] -= f.x, y[1] -= f.y, y[2] -= f.z, y[3] -= t.x, y[4] -= t.y, y[5] -= t.z;
     }
   });
-  // Stopped when the preconditioned residual's norm is rtol times the right-hand side's:
-  // r^T P^-1 r <= rtol^2 b^T P^-1 b.
-  precondition(B, Z);
-  const double tol2 = settings_.damping_rtol * settings_.damping_rtol * inner(B, Z);
-  each([&](std::size_t c) { R[c] = B[c]; });  // from dV = 0
-  each([&](std::size_t c) { Pd[c] = Z[c]; });
-  double rz = inner(R, Z);
+  // In the scaled variables: R = L^-1 B (from y = 0), and CG stops when the residual's norm is rtol
+  // times the right-hand side's, r^T D^-1 r <= rtol^2 b^T D^-1 b in the unscaled ones.
+  for (int e : owned) {
+    const std::size_t i = 6 * static_cast<std::size_t>(e);
+    const double* L = &w.linv[kTri * static_cast<std::size_t>(e)];
+    for (int a = 0, t = 0; a < 6; ++a, t += a) {
+      double v = 0;
+      for (int c = 0; c <= a; ++c) v += L[t + c] * B[i + static_cast<std::size_t>(c)];
+      R[i + static_cast<std::size_t>(a)] = v;
+    }
+  }
+  each([&](std::size_t c) { Pd[c] = R[c]; });
+  double rr = inner(R, R);
+  const double tol2 = settings_.damping_rtol * settings_.damping_rtol * rr;
   int it = 0;
-  for (; it < kMaxDampingIterations && rz > tol2; ++it) {
-    share(Pd);
+  std::optional<PhaseTimers::Scope> solving(std::in_place, timers_, "damping/cg");  // the iterations alone
+  for (; it < kMaxDampingIterations && rr > tol2; ++it) {
+    share(Pd, 6);
     apply(Pd, AP);
-    const double alpha = rz / inner(Pd, AP);
-    // One pass: the update, the preconditioner and this element's share of r^T z.
+    const double alpha = rr / inner(Pd, AP);
+    // One pass: the update and this element's share of r^T r.
     ExactSum sum;
     for (int e : owned) {
       const std::size_t i = 6 * static_cast<std::size_t>(e);
-      for (int c = 0; c < 6; ++c) X[i + c] += alpha * Pd[i + c], R[i + c] -= alpha * AP[i + c];
-      for (int c = 0; c < 6; ++c) Z[i + c] = 0;
-      axpy6(w.inv_f[static_cast<std::size_t>(e)], &R[i], &Z[i]);
       double t = 0;
-      for (int c = 0; c < 6; ++c) t += R[i + c] * Z[i + c];
+      for (int c = 0; c < 6; ++c) {
+        X[i + c] += alpha * Pd[i + c], R[i + c] -= alpha * AP[i + c];
+        t += R[i + c] * R[i + c];
+      }
       sum.add(t);
     }
     if (decomp_.size() > 1) sum.all_reduce(decomp_.comm());
-    const double rz_new = sum.value();
-    const double beta = rz_new / rz;
-    rz = rz_new;
-    each([&](std::size_t c) { Pd[c] = Z[c] + beta * Pd[c]; });
+    const double rr_new = sum.value();
+    const double beta = rr_new / rr;
+    rr = rr_new;
+    each([&](std::size_t c) { Pd[c] = R[c] + beta * Pd[c]; });
   }
-  if (rz > tol2)
+  solving.reset();
+  if (rr > tol2)
     throw CollectiveRunError("blast: the bond dashpots' solve (docs/theory.md B9a) did not reach blast.damping_rtol in " +
                              std::to_string(kMaxDampingIterations) + " iterations at step " + std::to_string(steps_));
+  // Back to the velocities: dV = L^-T y (into B), V+ = V + dV (into X).
+  for (int e : owned) {
+    const std::size_t i = 6 * static_cast<std::size_t>(e);
+    const double* L = &w.linv[kTri * static_cast<std::size_t>(e)];
+    double d[6] = {0, 0, 0, 0, 0, 0};
+    for (int a = 0, t = 0; a < 6; ++a, t += a)
+      for (int c = 0; c <= a; ++c) d[c] += L[t + c] * X[i + static_cast<std::size_t>(a)];
+    for (int c = 0; c < 6; ++c) X[i + static_cast<std::size_t>(c)] = d[c];
+  }
   damping_iterations_ += it;
   ++damping_solves_;
   // The dashpots' impulses h D (theta du+ + (1 - theta) du) at V+ = V + dV, unit by unit, equal and
   // opposite at the vertex: linear and angular momentum are kept to round-off whatever the residual.
   each([&](std::size_t c) { X[c] += V0[c]; });
-  share(X);
+  share(X, 6);
   each_unit(X, [&](const DampingLink& k, const DampingUnit& u, const Vec3& du_new) {
     Vec3 du = du_new;
     if (c_old > 0) {

@@ -81,6 +81,47 @@ void FractureSolver::advance_to(std::size_t i, double t) {
   w_[i] = spin(i, q_[i].unrotate(L_[i]));
 }
 
+void FractureSolver::advance_all(const std::vector<int>& elements, double t) {
+  // advance_to on each, those that move kBatch at a time (free_rotation_steps: the same bits).
+  constexpr int W = kBatch;
+  int at[W];
+  int n = 0;
+  auto flush = [&] {
+    Quaternion q[W];
+    Vec3 Lb[W], I[W], x_old[W];
+    double h[W];
+    for (int b = 0; b < W; ++b) {
+      const std::size_t i = static_cast<std::size_t>(at[b]);
+      h[b] = t - t_el_[i];
+      x_old[b] = x_[i];
+      x_[i] += v_[i] * h[b];
+      q[b] = q_[i];
+      Lb[b] = q_[i].unrotate(L_[i]);
+      I[b] = block_.inertia[i];
+    }
+    free_rotation_steps<W>(q, Lb, I, h);
+    for (int b = 0; b < W; ++b) {
+      const std::size_t i = static_cast<std::size_t>(at[b]);
+      const Quaternion q_old = q_[i];
+      q_[i] = q[b];
+      L_[i] = q_[i].rotate(Lb[b]);
+      add_travel(i, x_old[b], q_old);
+      t_el_[i] = t;
+      w_[i] = spin(i, q_[i].unrotate(L_[i]));
+    }
+    n = 0;
+  };
+  for (int e : elements) {
+    if (t - t_el_[static_cast<std::size_t>(e)] > 0) {
+      at[n++] = e;
+      if (n == W) flush();
+    } else {
+      advance_to(static_cast<std::size_t>(e), t);
+    }
+  }
+  for (int b = 0; b < n; ++b) advance_to(static_cast<std::size_t>(at[b]), t);
+}
+
 void FractureSolver::kick_impulse(std::size_t i) {
   v_[i] += S_[i] / block_.mass[i];
   L_[i] += A_[i];
@@ -301,8 +342,8 @@ void FractureSolver::multirate_step() {
     if (immediate) {
       auto timer = timers_.scope("kick_drift");
       for (int k = first; k <= K; ++k) {
-        for (int e : by_level[static_cast<std::size_t>(rank)][static_cast<std::size_t>(k)]) advance_to(static_cast<std::size_t>(e), t);
-        for (int e : halo_.in[static_cast<std::size_t>(k)]) advance_to(static_cast<std::size_t>(e), t);
+        advance_all(by_level[static_cast<std::size_t>(rank)][static_cast<std::size_t>(k)], t);
+        advance_all(halo_.in[static_cast<std::size_t>(k)], t);
       }
     }
     {
@@ -332,14 +373,24 @@ void FractureSolver::multirate_step() {
       auto timer = timers_.scope("contact_forces");
       for (int k = first; k <= K; ++k) {
         const double h = std::ldexp(dt_, -k);
-        const std::vector<int>& due_pairs = contacts[static_cast<std::size_t>(k)];
+        const std::vector<int>& due = contacts[static_cast<std::size_t>(k)];
+        // B7a first, on every due pair (its force is zero where it cannot touch), then the pairs
+        // that may touch: their spheres are scattered (their loads were half of a pair's time) and
+        // are asked for ahead among the pairs evaluated, not among those skipped.
+        std::vector<int>& due_pairs = skip ? touching_ : contacts[static_cast<std::size_t>(k)];
+        if (skip) {
+          touching_.clear();
+          for (std::size_t n = 0; n < due.size(); ++n) {
+            if (n + kPrefetchAhead < due.size()) __builtin_prefetch(&pairs_[static_cast<std::size_t>(due[n + kPrefetchAhead])]);
+            const ListedPair& pair = pairs_[static_cast<std::size_t>(due[n])];
+            if (may_touch(pair, static_cast<std::size_t>(pair.ea), static_cast<std::size_t>(pair.eb))) touching_.push_back(due[n]);
+          }
+        }
         for (std::size_t n = 0; n < due_pairs.size(); ++n) {
-          // The pairs' spheres are scattered too (the sphere loads were half of a pair's time).
           if (n + kPrefetchAhead < due_pairs.size()) prefetch_pair(static_cast<std::size_t>(due_pairs[n + kPrefetchAhead]));
           const int p = due_pairs[n];
           ListedPair& pair = pairs_[static_cast<std::size_t>(p)];
           const std::size_t a = static_cast<std::size_t>(pair.ea), b = static_cast<std::size_t>(pair.eb);
-          if (skip && !may_touch(pair, a, b)) continue;  // B7a: its force is zero
           ++contact_evaluations_;
           const PairForce f = contact_force(static_cast<std::size_t>(p), pose_at(a, t), pose_at(b, t), h);
           if (skip) note_gap(pair, a, b, f.gap);
@@ -397,7 +448,7 @@ void FractureSolver::multirate_step() {
   ++steps_;
   if (immediate) {
     // Everyone drifts to the macro step's end and the states travel once more.
-    for (int e : owned_by_rank_[static_cast<std::size_t>(rank)]) advance_to(static_cast<std::size_t>(e), time_);
+    advance_all(owned_by_rank_[static_cast<std::size_t>(rank)], time_);
     std::fill(t_el_.begin(), t_el_.end(), time_);
     if (P > 1) exchange_elements(owned_by_rank_);
     if (acting) {

@@ -219,6 +219,8 @@ class FractureSolver {
   Pose pose_at(std::size_t e, double t) const;  // on its piecewise-linear path (B10)
   void assign_levels();
   void advance_to(std::size_t e, double t);  // drift (x, q) from its clock to t
+  void advance_all(const std::vector<int>& elements, double t);  // advance_to on each, interleaved
+  static constexpr int kBatch = 4;  // elements drifted together (free_rotation_steps)
   void prefetch_bond(std::size_t b) const;  // a cache hint: the bond's geometry and state
   void prefetch_pair(std::size_t p) const;  // a cache hint: the pair's two spheres
   // B7a: adds to travel_[e] how far any point of element e can have moved since its state
@@ -323,6 +325,7 @@ class FractureSolver {
     return {first, second, spheres_[static_cast<std::size_t>(first)].element, spheres_[static_cast<std::size_t>(second)].element};
   }
   std::vector<ListedPair> pairs_;
+  std::vector<int> touching_;  // a sub-step's due pairs that may touch (B7a), storage kept
   // B7b: a pair's sunk depth went to `depth` (0: an ordinary pair again), on every rank that holds it.
   void set_sunk(ListedPair& p, double depth);
   // B7b's depths as the evaluations leave them: a listed pair's `sunk` only falls, and the map
@@ -403,9 +406,10 @@ class FractureSolver {
   struct DampingWork {
     std::vector<DampingUnit> units;  // three per link
     std::vector<DampingLink> links;
-    std::vector<Block6> diag;  // per element (owned)
-    std::vector<Block6f> diag_f, inv_f, off_f;  // single precision: those, their inverses, per link
-    std::vector<double> x, b, r, z, p, ap;
+    std::vector<Block6> diag, off;  // per element (owned), per link
+    std::vector<double> linv;       // per element: its diagonal block's L^-1 (21 lower entries by rows)
+    std::vector<Block6f> off_f;     // per link: its block scaled, L_i^-1 B L_j^-T, in single precision
+    std::vector<double> x, b, r, p, ap;
     std::vector<double> v0;           // theta < 1: the velocities before
     std::vector<std::array<int, 2>> sent, read;
     std::vector<int> neighbours;
@@ -415,6 +419,7 @@ class FractureSolver {
   };
   DampingWork damping_;
   static constexpr int kDampingTag = 1718;
+  static constexpr std::size_t kTri = 21;  // a 6 x 6 lower triangle's entries
   static constexpr int kMaxDampingIterations = 1000;
   long steps_ = 0, contact_evaluations_ = 0, bond_evaluations_ = 0, element_steps_ = 0, list_builds_ = 0,
        list_refreshes_ = 0;

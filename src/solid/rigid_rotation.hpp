@@ -79,32 +79,51 @@ inline void small_angle_sincos(double phi, double& s, double& c) {
 }
 
 // Free rotation over dt; L_body is the angular momentum in the body (principal) frame, inertia the
-// principal moments.
-inline void free_rotation_step(Quaternion& q, Vec3& L_body, const Vec3& inertia, double dt) {
-  auto sub = [&](int k, double h) {
-    const double phi = h * L_body[k] / inertia[k];
-    // The half angle's sine and cosine turn q; the whole angle's follow from them by the
-    // double-angle formulas (one series per sub-rotation instead of two).
-    double sh, ch;
-    small_angle_sincos(0.5 * phi, sh, ch);
-    const double s = 2 * sh * ch, c = 1 - 2 * sh * sh;
-    const int a = (k + 1) % 3, b = (k + 2) % 3;
-    // L_body <- R_k(-phi) L_body: rotate the (a, b) components by -phi.
-    const double la = L_body[a], lb = L_body[b];
-    L_body[a] = c * la + s * lb;
-    L_body[b] = -s * la + c * lb;
-    Quaternion r{ch, 0, 0, 0};
-    (k == 0 ? r.x : (k == 1 ? r.y : r.z)) = sh;
-    q = q * r;
+// principal moments. For W bodies at once: the same operations on each, in the same order (the same
+// bits as one at a time), interleaved so that the bodies' chains of dependent operations overlap.
+template <int W>
+inline void free_rotation_steps(Quaternion* q, Vec3* L_body, const Vec3* inertia, const double* dt) {
+  auto sub = [&](int k, double f) {
+    double sh[W], ch[W], half[W];
+    for (int b = 0; b < W; ++b) half[b] = 0.5 * ((f * dt[b]) * L_body[b][k] / inertia[b][k]);
+    // The series for all, then libm's for any angle beyond it (small_angle_sincos, branch-free here).
+    for (int b = 0; b < W; ++b) {
+      constexpr double k6 = 1.0 / 6, k20 = 1.0 / 20, k42 = 1.0 / 42, k72 = 1.0 / 72;
+      constexpr double k2 = 0.5, k12 = 1.0 / 12, k30 = 1.0 / 30, k56 = 1.0 / 56, k90 = 1.0 / 90;
+      const double p = half[b], p2 = p * p;
+      sh[b] = p * (1 - p2 * k6 * (1 - p2 * k20 * (1 - p2 * k42 * (1 - p2 * k72))));
+      ch[b] = 1 - p2 * k2 * (1 - p2 * k12 * (1 - p2 * k30 * (1 - p2 * k56 * (1 - p2 * k90))));
+    }
+    for (int b = 0; b < W; ++b)
+      if (!(std::fabs(half[b]) < 1e-2)) small_angle_sincos(half[b], sh[b], ch[b]);
+    const int a = (k + 1) % 3, c2 = (k + 2) % 3;
+    for (int b = 0; b < W; ++b) {
+      // The half angle's sine and cosine turn q; the whole angle's follow from them by the
+      // double-angle formulas (one series per sub-rotation instead of two).
+      const double s = 2 * sh[b] * ch[b], c = 1 - 2 * sh[b] * sh[b];
+      // L_body <- R_k(-phi) L_body: rotate the (a, c2) components by -phi.
+      const double la = L_body[b][a], lb = L_body[b][c2];
+      L_body[b][a] = c * la + s * lb;
+      L_body[b][c2] = -s * la + c * lb;
+      Quaternion r{ch[b], 0, 0, 0};
+      (k == 0 ? r.x : (k == 1 ? r.y : r.z)) = sh[b];
+      q[b] = q[b] * r;
+    }
   };
-  sub(0, 0.5 * dt);
-  sub(1, 0.5 * dt);
-  sub(2, dt);
-  sub(1, 0.5 * dt);
-  sub(0, 0.5 * dt);
+  sub(0, 0.5);
+  sub(1, 0.5);
+  sub(2, 1.0);
+  sub(1, 0.5);
+  sub(0, 0.5);
   // Products of unit quaternions drift from |q| = 1 only by round-off; one Newton step removes it.
-  const double scale = 0.5 * (3.0 - q.norm2());
-  q.w *= scale, q.x *= scale, q.y *= scale, q.z *= scale;
+  for (int b = 0; b < W; ++b) {
+    const double scale = 0.5 * (3.0 - q[b].norm2());
+    q[b].w *= scale, q[b].x *= scale, q[b].y *= scale, q[b].z *= scale;
+  }
+}
+
+inline void free_rotation_step(Quaternion& q, Vec3& L_body, const Vec3& inertia, double dt) {
+  free_rotation_steps<1>(&q, &L_body, &inertia, &dt);
 }
 
 }  // namespace tessera
