@@ -292,6 +292,13 @@ void FractureSolver::multirate_step() {
       contacts[static_cast<std::size_t>(std::max(level_[a], level_[b]))].push_back(static_cast<int>(p));
     }
   }
+  // The hole's faces of my elements by their element's level, in the hole's order (an element's
+  // faces keep their order: its sums take the same bits).
+  clear_buckets(hole_buckets_, K + 1);
+  for (int sf : hole_faces_) {
+    const std::size_t e = static_cast<std::size_t>(block_.surface[static_cast<std::size_t>(sf)].element);
+    if (owner_[e] == rank) hole_buckets_[static_cast<std::size_t>(level_[e])].push_back(sf);
+  }
   // Immediate impulses (stability levels): an element is kicked whenever one of its pairs is
   // evaluated, so it is updated at its finest pair's level; every rank learns these levels (one
   // reduction per macro step) and with them which states travel at each sub-step.
@@ -403,13 +410,14 @@ void FractureSolver::multirate_step() {
       auto timer = timers_.scope("borehole");
       if (hole_) {
         const double pressure = hole_->pressure(t);
-        for (int sf : hole_faces_) {
-          const std::size_t e = static_cast<std::size_t>(block_.surface[static_cast<std::size_t>(sf)].element);
-          Vec3 F, T;
-          if (owner_[e] != rank || level_[e] < first || pressure == 0 || !hole_load(sf, pressure, F, T)) continue;
-          const double h = std::ldexp(dt_, -level_[e]);
-          S_[e] += F * h, A_[e] += T * h;
-        }
+        for (int k = first; k <= K && pressure != 0; ++k)
+          for (int sf : hole_buckets_[static_cast<std::size_t>(k)]) {
+            const std::size_t e = static_cast<std::size_t>(block_.surface[static_cast<std::size_t>(sf)].element);
+            Vec3 F, T;
+            if (!hole_load(sf, pressure, F, T)) continue;
+            const double h = std::ldexp(dt_, -k);
+            S_[e] += F * h, A_[e] += T * h;
+          }
       }
     }
     {

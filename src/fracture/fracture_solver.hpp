@@ -325,6 +325,7 @@ class FractureSolver {
     return {first, second, spheres_[static_cast<std::size_t>(first)].element, spheres_[static_cast<std::size_t>(second)].element};
   }
   std::vector<ListedPair> pairs_;
+  std::vector<std::vector<int>> hole_buckets_;  // my hole faces by their element's level (a macro step)
   std::vector<int> touching_;  // a sub-step's due pairs that may touch (B7a), storage kept
   // B7b: a pair's sunk depth went to `depth` (0: an ordinary pair again), on every rank that holds it.
   void set_sunk(ListedPair& p, double depth);
