@@ -66,60 +66,56 @@ void FractureSolver::prefetch_pair(std::size_t p) const {
   __builtin_prefetch(&spheres_[static_cast<std::size_t>(lp.second)]);
 }
 
-void FractureSolver::advance_to(std::size_t i, double t) {
-  const double h = t - t_el_[i];
-  if (h > 0) {
-    const Vec3 x_old = x_[i];
+template <int W>
+void FractureSolver::drift(const int* e, double t) {
+  // x += v h; the free rotation over h (T9); the travel (B7a); the clock; the spin at the new pose.
+  // W elements at once (free_rotation_steps: each one's operations as alone, the same bits).
+  Quaternion q[W];
+  Vec3 Lb[W], I[W], x_old[W];
+  double h[W];
+  for (int b = 0; b < W; ++b) {
+    const std::size_t i = static_cast<std::size_t>(e[b]);
+    h[b] = t - t_el_[i];
+    x_old[b] = x_[i];
+    x_[i] += v_[i] * h[b];
+    q[b] = q_[i];
+    Lb[b] = q_[i].unrotate(L_[i]);
+    I[b] = block_.inertia[i];
+  }
+  free_rotation_steps<W>(q, Lb, I, h);
+  for (int b = 0; b < W; ++b) {
+    const std::size_t i = static_cast<std::size_t>(e[b]);
     const Quaternion q_old = q_[i];
-    x_[i] += v_[i] * h;
-    Vec3 Lb = q_[i].unrotate(L_[i]);
-    free_rotation_step(q_[i], Lb, block_.inertia[i], h);
-    L_[i] = q_[i].rotate(Lb);
-    add_travel(i, x_old, q_old);
+    q_[i] = q[b];
+    L_[i] = q_[i].rotate(Lb[b]);
+    add_travel(i, x_old[b], q_old);
+    t_el_[i] = t;
+    w_[i] = spin(i, q_[i].unrotate(L_[i]));
+  }
+}
+
+void FractureSolver::advance_to(std::size_t i, double t) {
+  if (t - t_el_[i] > 0) {
+    const int e = static_cast<int>(i);
+    return drift<1>(&e, t);
   }
   t_el_[i] = t;
   w_[i] = spin(i, q_[i].unrotate(L_[i]));
 }
 
 void FractureSolver::advance_all(const std::vector<int>& elements, double t) {
-  // advance_to on each, those that move kBatch at a time (free_rotation_steps: the same bits).
-  constexpr int W = kBatch;
-  int at[W];
+  // advance_to on each; those that move kBatch at a time.
+  int at[kBatch];
   int n = 0;
-  auto flush = [&] {
-    Quaternion q[W];
-    Vec3 Lb[W], I[W], x_old[W];
-    double h[W];
-    for (int b = 0; b < W; ++b) {
-      const std::size_t i = static_cast<std::size_t>(at[b]);
-      h[b] = t - t_el_[i];
-      x_old[b] = x_[i];
-      x_[i] += v_[i] * h[b];
-      q[b] = q_[i];
-      Lb[b] = q_[i].unrotate(L_[i]);
-      I[b] = block_.inertia[i];
-    }
-    free_rotation_steps<W>(q, Lb, I, h);
-    for (int b = 0; b < W; ++b) {
-      const std::size_t i = static_cast<std::size_t>(at[b]);
-      const Quaternion q_old = q_[i];
-      q_[i] = q[b];
-      L_[i] = q_[i].rotate(Lb[b]);
-      add_travel(i, x_old[b], q_old);
-      t_el_[i] = t;
-      w_[i] = spin(i, q_[i].unrotate(L_[i]));
-    }
-    n = 0;
-  };
   for (int e : elements) {
     if (t - t_el_[static_cast<std::size_t>(e)] > 0) {
       at[n++] = e;
-      if (n == W) flush();
+      if (n == kBatch) drift<kBatch>(at, t), n = 0;
     } else {
       advance_to(static_cast<std::size_t>(e), t);
     }
   }
-  for (int b = 0; b < n; ++b) advance_to(static_cast<std::size_t>(at[b]), t);
+  for (int b = 0; b < n; ++b) drift<1>(&at[b], t);
 }
 
 void FractureSolver::kick_impulse(std::size_t i) {

@@ -220,7 +220,9 @@ class FractureSolver {
   void assign_levels();
   void advance_to(std::size_t e, double t);  // drift (x, q) from its clock to t
   void advance_all(const std::vector<int>& elements, double t);  // advance_to on each, interleaved
-  static constexpr int kBatch = 4;  // elements drifted together (free_rotation_steps)
+  template <int W>
+  void drift(const int* e, double t);  // W elements that move, from their clocks to t, at once
+  static constexpr int kBatch = 4;     // elements drifted together (free_rotation_steps)
   void prefetch_bond(std::size_t b) const;  // a cache hint: the bond's geometry and state
   void prefetch_pair(std::size_t p) const;  // a cache hint: the pair's two spheres
   // B7a: adds to travel_[e] how far any point of element e can have moved since its state
