@@ -112,5 +112,39 @@ TEST(RigidRotation, SymmetricTopPrecessesAtTheAnalyticRate) {
   EXPECT_NEAR(norm(t.L_body), std::hypot(0.3, 1.0), 1e-12);  // |L| to round-off (1e4 rotations)
 }
 
+TEST(RigidRotation, BodiesTurnedTogetherTakeTheBitsOfEachTurnedAlone) {
+  // free_rotation_steps<W> interleaves W bodies (the blast's drift, fracture_multirate.cpp); each
+  // body must take the operations it takes alone, to the bit, whatever its neighbours in the batch:
+  // different inertias, momenta and steps, one with half-angles past the series' range (libm's
+  // sine and cosine there), one standing still.
+  Quaternion q[4], alone[4];
+  Vec3 L[4] = {{0.3, -1.2, 0.7}, {2.0, 0.1, -0.4}, {0.0, 0.0, 0.0}, {-0.5, 0.9, 1.1}};
+  Vec3 L_alone[4];
+  const Vec3 inertia[4] = {{1.0, 2.0, 3.0}, {0.2, 0.25, 0.3}, {1.0, 1.0, 1.0}, {5e-3, 7e-3, 9e-3}};
+  const double dt[4] = {1e-3, 2e-2, 1e-3, 1e-5};
+  for (int b = 0; b < 4; ++b) {
+    q[b] = alone[b] = Quaternion{0.5, 0.5, -0.5, 0.5};
+    L_alone[b] = L[b];
+  }
+  bool past_series = false;
+  for (int n = 0; n < 1000; ++n) {
+    past_series = past_series || std::fabs(0.5 * 0.5 * dt[1] * L[1].x / inertia[1].x) >= 1e-2;
+    free_rotation_steps<4>(q, L, inertia, dt);
+    for (int b = 0; b < 4; ++b) free_rotation_step(alone[b], L_alone[b], inertia[b], dt[b]);
+  }
+  EXPECT_TRUE(past_series);  // the second body's first sub-rotation leaves the series' range
+  for (int b = 0; b < 4; ++b) {
+    EXPECT_EQ(q[b].w, alone[b].w) << b;
+    EXPECT_EQ(q[b].x, alone[b].x) << b;
+    EXPECT_EQ(q[b].y, alone[b].y) << b;
+    EXPECT_EQ(q[b].z, alone[b].z) << b;
+    EXPECT_EQ(L[b].x, L_alone[b].x) << b;
+    EXPECT_EQ(L[b].y, L_alone[b].y) << b;
+    EXPECT_EQ(L[b].z, L_alone[b].z) << b;
+  }
+  // The still body stays where it was (its q only renormalised).
+  EXPECT_NEAR(q[2].w, 0.5, 1e-15);
+}
+
 }  // namespace
 }  // namespace tessera
