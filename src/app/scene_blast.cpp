@@ -57,6 +57,7 @@ FractureSettings read_fracture_settings(const ConfigNode& blast) {
   s.implicit_damping = blast.flag("implicit_damping", false);
   s.damping_rtol = blast.real("damping_rtol", Dim::none, Range::positive(), s.damping_rtol);
   s.damping_theta = blast.real("damping_theta", Dim::none, Range::closed(0.5, 1), s.damping_theta);
+  s.damping_frozen_angle = blast.real("damping_frozen_angle", Dim::none, Range::non_negative(), s.damping_frozen_angle);
   const std::string stepping = blast.choice("stepping", {"uniform", "travel", "stability"}, "uniform");
   s.stepping = stepping == "travel" ? Stepping::travel : (stepping == "stability" ? Stepping::stability : Stepping::uniform);
   s.travel_limit = blast.real("travel_limit", Dim::length, Range::positive(), s.travel_limit);
@@ -355,11 +356,15 @@ void BlastScene::write_checkpoint(const std::string& path) {
     const Quaternion& q = list.q[e];
     list_poses.insert(list_poses.end(), {x.x, x.y, x.z, q.w, q.x, q.y, q.z});
   }
+  std::vector<double> frozen;
+  const std::vector<Quaternion> fq = solver_->damping_frozen();
+  for (std::size_t e = 0; e < n; ++e) frozen.insert(frozen.end(), {fq[e].w, fq[e].x, fq[e].y, fq[e].z});
   const std::string tmp = path + ".tmp";
   {
     H5File f = H5File::create(tmp, comm);
     f.write_rows("elements", state.data(), n, 19);
     f.write_rows("contact_list_poses", list_poses.data(), list_poses.size() / 7, 7);
+    f.write_rows("damping_frozen", frozen.data(), n, 4);  // B9b: the damping matrix's orientations
     std::vector<std::int64_t> pairs, unlisted;
     for (const auto& [a, b] : list.pairs) pairs.insert(pairs.end(), {a, b});
     for (int u : list.unlisted) unlisted.push_back(u);
@@ -443,6 +448,13 @@ void BlastScene::read_checkpoint(const std::string& path) {
     list.deepest_born_overlap = f.attribute_double("deepest_born_overlap");
   }
   solver_->restore(x, q, v, L, bs, broken, list, F, T);
+  if (f.has("damping_frozen")) {  // B9b (since 2026-12-07; before, the orientations themselves)
+    const std::vector<double> fr = f.read_all<double>("damping_frozen", cols);
+    if (cols != 4 || fr.size() != 4 * b.size()) throw InputError("restart", path, "4 numbers per element in damping_frozen");
+    std::vector<Quaternion> frozen(b.size());
+    for (std::size_t e = 0; e < b.size(); ++e) frozen[e] = {fr[4 * e], fr[4 * e + 1], fr[4 * e + 2], fr[4 * e + 3]};
+    solver_->set_damping_frozen(frozen);
+  }
   solver_->set_clock(f.attribute_double("time"), f.attribute_long("steps"));
   probe_displacement_ = f.attribute_double("probe_displacement");
   probed_ = f.attribute_long("probed") != 0;

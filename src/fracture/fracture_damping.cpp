@@ -56,20 +56,36 @@ Block6 cholesky_inverse(const Block6& a) {
 
 void FractureSolver::damp_bonds(double h) {
   if (!settings_.damping || !settings_.implicit_damping) return;
-  const int rank = decomp_.rank();
-  const std::vector<int>& owned = owned_by_rank_[static_cast<std::size_t>(rank)];
-  const BondLaw& law = settings_.bond;
-  DampingWork& w = damping_;
+  new_epoch();
+  damping_links(h);
+  damping_matrix(h);
+  damping_solve();
+  new_epoch();
+}
+
+void FractureSolver::damping_links(double h) {
   // The vertex units of the intact bonds with an element here, in bond order, in world frame (the
   // master face's normal, each element's lever), with h folded in; and what travels per iteration:
-  // to each rank, my elements bonded to its elements, and from it, the same of its elements.
+  // to each rank, my elements bonded to its elements, and from it, the same of its elements. A bond
+  // that broke since the last call leaves its slot, and its elements' diagonal blocks are remade.
+  const int rank = decomp_.rank();
+  const BondLaw& law = settings_.bond;
+  DampingWork& w = damping_;
+  const std::size_t n = block_.size();
   w.units.clear(), w.links.clear();
+  w.remade.assign(n, 0);
+  if (w.slot.size() != block_.bonds.size()) w.slot.assign(block_.bonds.size(), -1), w.h = 0;
   std::vector<std::array<int, 2>>&sent = w.sent, &read = w.read;
   sent.clear(), read.clear();
-  new_epoch();
   for (std::size_t b = 0; b < block_.bonds.size(); ++b) {
-    if (broken_[b]) continue;
     const BondGeometry& g = block_.bonds[b];
+    int& slot = w.slot[b];
+    if (broken_[b]) {
+      if (slot >= 0 && w.live[static_cast<std::size_t>(slot)])
+        w.live[static_cast<std::size_t>(slot)] = 0, w.remade[static_cast<std::size_t>(g.master)] = 1,
+                                            w.remade[static_cast<std::size_t>(g.slave)] = 1;
+      continue;
+    }
     const int oi = owner_[static_cast<std::size_t>(g.master)], oj = owner_[static_cast<std::size_t>(g.slave)];
     if (oi != rank && oj != rank) continue;
     if (oi != oj) {
@@ -77,11 +93,16 @@ void FractureSolver::damp_bonds(double h) {
       sent.push_back({mine_i ? oj : oi, mine_i ? g.master : g.slave});
       read.push_back({mine_i ? oj : oi, mine_i ? g.slave : g.master});
     }
+    if (slot < 0) {  // a bond first seen here: every block is made again (the first call)
+      slot = static_cast<int>(w.live.size());
+      w.live.push_back(0), w.to_i.emplace_back(), w.to_j.emplace_back(), w.off.emplace_back(), w.off_f.emplace_back();
+      w.h = 0;
+    }
     const Pose& pi = pose(static_cast<std::size_t>(g.master));
     const Pose& pj = pose(static_cast<std::size_t>(g.slave));
     const Vec3 nw = pi.rot(g.normal);
     const double share = settings_.damping_theta * h * g.area / 3;
-    w.links.push_back({g.master, g.slave, oi == rank, oj == rank});
+    w.links.push_back({static_cast<int>(b), g.master, g.slave, slot, oi == rank, oj == rank});
     for (int k = 0; k < 3; ++k)
       w.units.push_back({nw, pi.rot(g.at_master[k]), pj.rot(g.at_slave[k]), share * law.cn, share * law.cs});
   }
@@ -100,39 +121,95 @@ void FractureSolver::damp_bonds(double h) {
     while (w.neighbours[at] != r) ++at;
     w.recv_elements[at].push_back(e);
   }
+}
 
-  // The matrix M + theta h C in 6 x 6 blocks: each owned element's diagonal block (its mass and world
-  // inertia R diag(I) R^T, plus J^T D J of its units), each link's block (rows: the master's
-  // velocities, columns: the slave's). A unit's J is [1, X] for the slave and -[1, X] for the
-  // master, X = -[r]x the map w -> w x r; with D = a' n n^T + a_t 1 (a' = a_n - a_t) and s = r x n
-  // (= X^T n):  X_a^T D = a' s_a n^T + a_t X_a^T,  X_a^T D X_b = a' s_a s_b^T + a_t ((r_a . r_b) 1 - r_b r_a^T).
-  const std::size_t n = block_.size();
-  w.diag.resize(n);
-  for (int e : owned) {
-    const std::size_t i = static_cast<std::size_t>(e);
-    const Pose& p = pose(i);
-    const Vec3& I = block_.inertia[i];
-    Block6& B = w.diag[i];
-    B.fill(0.0);
-    for (int a = 0; a < 3; ++a) {
-      B[6 * a + a] = block_.mass[i];
-      for (int c = 0; c < 3; ++c)  // R[a] is row a of body -> world
-        B[6 * (3 + a) + 3 + c] = p.R[a].x * I.x * p.R[c].x + p.R[a].y * I.y * p.R[c].y + p.R[a].z * I.z * p.R[c].z;
-    }
+void FractureSolver::damping_share(std::vector<double>& V, std::size_t width) {
+  // The partners' entries of a vector of `width` numbers per element, from their owners.
+  DampingWork& w = damping_;
+  const std::size_t m = w.neighbours.size();
+  if (m == 0) return;
+  w.send.resize(m), w.recv.resize(m);
+  w.requests.assign(2 * m, MPI_REQUEST_NULL);
+  for (std::size_t k = 0; k < m; ++k) {
+    w.recv[k].resize(width * w.recv_elements[k].size());
+    MPI_Irecv(w.recv[k].data(), static_cast<int>(w.recv[k].size()), MPI_DOUBLE, w.neighbours[k], kDampingTag,
+              decomp_.comm(), &w.requests[k]);
   }
+  for (std::size_t k = 0; k < m; ++k) {
+    w.send[k].clear();
+    for (int e : w.send_elements[k])
+      w.send[k].insert(w.send[k].end(), &V[width * static_cast<std::size_t>(e)],
+                       &V[width * static_cast<std::size_t>(e)] + width);
+    MPI_Isend(w.send[k].data(), static_cast<int>(w.send[k].size()), MPI_DOUBLE, w.neighbours[k], kDampingTag,
+              decomp_.comm(), &w.requests[m + k]);
+  }
+  MPI_Waitall(static_cast<int>(w.requests.size()), w.requests.data(), MPI_STATUSES_IGNORE);
+  for (std::size_t k = 0; k < m; ++k)
+    for (std::size_t a = 0; a < w.recv_elements[k].size(); ++a)
+      std::copy(&w.recv[k][width * a], &w.recv[k][width * a] + width,
+                &V[width * static_cast<std::size_t>(w.recv_elements[k][a])]);
+}
+
+namespace {
+// Entry (a, c), c <= a, of a lower triangle stored by rows.
+constexpr std::size_t lower(int a, int c) { return static_cast<std::size_t>(a * (a + 1) / 2 + c); }
+}  // namespace
+
+void FractureSolver::damping_matrix(double h) {
+  const int rank = decomp_.rank();
+  const std::vector<int>& owned = owned_by_rank_[static_cast<std::size_t>(rank)];
+  const BondLaw& law = settings_.bond;
+  DampingWork& w = damping_;
+  const std::size_t n = block_.size();
+  // Every block made again: the first call, a bond first seen, or another step.
+  const bool full = w.h != h;
+  w.h = h;
+  // B9b: the frozen orientations of the elements read here (owned, and the partners of its bonds)
+  // follow them past the angle; every rank holding an element decides alike, from its state alone.
+  if (frozen_q_.size() != n) frozen_q_ = q_;
+  w.frozen.resize(n);
+  w.turned.assign(n, 0);
+  const bool exact = settings_.damping_frozen_angle == 0;
+  auto follow = [&](std::size_t e) {
+    if (w.turned[e]) return;
+    const Quaternion &a = q_[e], &b = frozen_q_[e];
+    const double c = std::fabs(a.w * b.w + a.x * b.x + a.y * b.y + a.z * b.z);
+    const bool moved = exact ? (a.w != b.w || a.x != b.x || a.y != b.y || a.z != b.z) : c < frozen_cos_[e];
+    if (moved) frozen_q_[e] = a, w.turned[e] = 1;
+    if (moved || full) w.frozen[e] = make_pose({}, {}, {}, frozen_q_[e]);
+  };
+  for (int e : owned) follow(static_cast<std::size_t>(e));
+  for (const DampingLink& k : w.links) {
+    if (!k.own_i) follow(static_cast<std::size_t>(k.i));
+    if (!k.own_j) follow(static_cast<std::size_t>(k.j));
+  }
+
+  // Each link's terms, remade where one of its elements' frozen orientations moved: its terms in the
+  // two diagonal blocks (lower triangles) and its block (rows: the master's velocities, columns: the
+  // slave's). A unit's J is [1, X] for the slave and -[1, X] for the master, X = -[r]x the map
+  // w -> w x r; with D = a' n n^T + a_t 1 (a' = a_n - a_t) and s = r x n (= X^T n):
+  // X_a^T D = a' s_a n^T + a_t X_a^T,  X_a^T D X_b = a' s_a s_b^T + a_t ((r_a . r_b) 1 - r_b r_a^T).
   // A link's three units share n, a' and a_t, and s = r x n is linear in r: the blocks need only
   // the sums over the vertices of r, of the products s s^T and r r^T, and of the dot products.
-  w.off.resize(w.links.size());
+  w.link_remade.assign(w.links.size(), 0);
   for (std::size_t l = 0; l < w.links.size(); ++l) {
     const DampingLink& k = w.links[l];
-    const DampingUnit* u = &w.units[3 * l];
-    const double ap = u[0].an - u[0].at, at = u[0].at;
-    const double n[3] = {u[0].n.x, u[0].n.y, u[0].n.z};
+    const std::size_t s = static_cast<std::size_t>(k.slot), ei = static_cast<std::size_t>(k.i),
+                      ej = static_cast<std::size_t>(k.j);
+    if (!full && w.live[s] && !w.turned[ei] && !w.turned[ej]) continue;
+    w.link_remade[l] = 1, w.live[s] = 1, w.remade[ei] = 1, w.remade[ej] = 1;
+    const BondGeometry& g = block_.bonds[static_cast<std::size_t>(k.bond)];
+    const Pose &pi = w.frozen[ei], &pj = w.frozen[ej];
+    const double share = settings_.damping_theta * h * g.area / 3;
+    const double at = share * law.cs, ap = share * law.cn - at;
+    const Vec3 nw = pi.rot(g.normal);
+    const double n[3] = {nw.x, nw.y, nw.z};
     double ri[3] = {0, 0, 0}, rj[3] = {0, 0, 0}, Sii[3][3] = {}, Sjj[3][3] = {}, Sij[3][3] = {}, Rii[3][3] = {},
            Rjj[3][3] = {}, Rji[3][3] = {};
     for (int v = 0; v < 3; ++v) {
-      const Vec3 si = cross(u[v].ri, u[0].n), sj = cross(u[v].rj, u[0].n);
-      const double a_[3] = {u[v].ri.x, u[v].ri.y, u[v].ri.z}, b_[3] = {u[v].rj.x, u[v].rj.y, u[v].rj.z};
+      const Vec3 a = pi.rot(g.at_master[v]), b = pj.rot(g.at_slave[v]);
+      const Vec3 si = cross(a, nw), sj = cross(b, nw);
+      const double a_[3] = {a.x, a.y, a.z}, b_[3] = {b.x, b.y, b.z};
       const double si_[3] = {si.x, si.y, si.z}, sj_[3] = {sj.x, sj.y, sj.z};
       for (int p = 0; p < 3; ++p) {
         ri[p] += a_[p], rj[p] += b_[p];
@@ -142,7 +219,7 @@ void FractureSolver::damp_bonds(double h) {
         }
       }
     }
-    const Vec3 si = cross(Vec3{ri[0], ri[1], ri[2]}, u[0].n), sj = cross(Vec3{rj[0], rj[1], rj[2]}, u[0].n);
+    const Vec3 si = cross(Vec3{ri[0], ri[1], ri[2]}, nw), sj = cross(Vec3{rj[0], rj[1], rj[2]}, nw);
     const double s_i[3] = {si.x, si.y, si.z}, s_j[3] = {sj.x, sj.y, sj.z};
     const double tii = Rii[0][0] + Rii[1][1] + Rii[2][2], tjj = Rjj[0][0] + Rjj[1][1] + Rjj[2][2],
                  tij = Rji[0][0] + Rji[1][1] + Rji[2][2];
@@ -151,9 +228,8 @@ void FractureSolver::damp_bonds(double h) {
       const double m[3][3] = {{0, r[2], -r[1]}, {-r[2], 0, r[0]}, {r[1], -r[0], 0}};
       return m[p][q];
     };
-    Block6& O = w.off[l];
-    Block6* Di = k.own_i ? &w.diag[static_cast<std::size_t>(k.i)] : nullptr;
-    Block6* Dj = k.own_j ? &w.diag[static_cast<std::size_t>(k.j)] : nullptr;
+    Lower6 &Ti = w.to_i[s], &Tj = w.to_j[s];
+    Block6& O = w.off[s];
     for (int p = 0; p < 3; ++p)
       for (int q = 0; q < 3; ++q) {
         const double id = p == q ? 1.0 : 0.0;
@@ -164,76 +240,67 @@ void FractureSolver::damp_bonds(double h) {
         const double ww_ii = ap * Sii[p][q] + at * (tii * id - Rii[q][p]);
         const double ww_jj = ap * Sjj[p][q] + at * (tjj * id - Rjj[q][p]);
         const double ww_ij = ap * Sij[p][q] + at * (tij * id - Rji[p][q]);
-        if (Di) {
-          Block6& M = *Di;
-          M[6 * p + q] += vv, M[6 * p + 3 + q] += vw_i, M[6 * (3 + q) + p] += vw_i, M[6 * (3 + p) + 3 + q] += ww_ii;
-        }
-        if (Dj) {
-          Block6& M = *Dj;
-          M[6 * p + q] += vv, M[6 * p + 3 + q] += vw_j, M[6 * (3 + q) + p] += vw_j, M[6 * (3 + p) + 3 + q] += ww_jj;
-        }
+        // The diagonal blocks' lower triangles: (p, q) and (3 + p, 3 + q) for q <= p, (3 + q, p) all.
+        if (q <= p) Ti[lower(p, q)] = vv, Tj[lower(p, q)] = vv, Ti[lower(3 + p, 3 + q)] = ww_ii, Tj[lower(3 + p, 3 + q)] = ww_jj;
+        Ti[lower(3 + q, p)] = vw_i, Tj[lower(3 + q, p)] = vw_j;
         O[6 * p + q] = -vv, O[6 * p + 3 + q] = -vw_j, O[6 * (3 + p) + q] = -wv_i, O[6 * (3 + p) + 3 + q] = -ww_ij;
       }
   }
+
+  // Each owned element's diagonal block where one of its terms changed: its mass and world inertia
+  // R diag(I) R^T at its frozen orientation, then its intact bonds' terms in bond order (the same
+  // order on any rank count), lower triangle only; its Cholesky factor's inverse L^-1 (21 lower
+  // entries by rows). The partners' L^-1 from their owners.
+  w.diag.resize(n);
+  if (w.linv.size() != kTri * n) w.linv.assign(kTri * n, 0.0);
+  for (int e : owned) {
+    const std::size_t i = static_cast<std::size_t>(e);
+    if (!full && !w.remade[i]) continue;
+    w.remade[i] = 1;
+    const Pose& p = w.frozen[i];
+    const Vec3& I = block_.inertia[i];
+    Block6& B = w.diag[i];
+    B.fill(0.0);
+    for (int a = 0; a < 3; ++a) {
+      B[6 * a + a] = block_.mass[i];
+      for (int c = 0; c < 3; ++c)  // R[a] is row a of body -> world
+        B[6 * (3 + a) + 3 + c] = p.R[a].x * I.x * p.R[c].x + p.R[a].y * I.y * p.R[c].y + p.R[a].z * I.z * p.R[c].z;
+    }
+    for (int k : element_bonds_[i]) {
+      if (broken_[static_cast<std::size_t>(k)]) continue;
+      const std::size_t s = static_cast<std::size_t>(w.slot[static_cast<std::size_t>(k)]);
+      const Lower6& T = block_.bonds[static_cast<std::size_t>(k)].master == e ? w.to_i[s] : w.to_j[s];
+      for (int a = 0; a < 6; ++a)
+        for (int c = 0; c <= a; ++c) B[static_cast<std::size_t>(6 * a + c)] += T[lower(a, c)];
+    }
+    const Block6 m = cholesky_inverse(B);
+    double* t = &w.linv[kTri * i];
+    for (int a = 0; a < 6; ++a)
+      for (int c = 0; c <= a; ++c) *t++ = m[static_cast<std::size_t>(6 * a + c)];
+  }
+  damping_share(w.linv, kTri);
 
   // The solve in the blocks' own scale (block Jacobi as a change of variables): with each diagonal
   // block D_i = L_i L_i^T, CG on L^-1 (M + theta h C) L^-T, whose diagonal blocks are the identity
   // and whose link blocks are L_i^-1 B L_j^-T, for y = L^T dV from L^-1 b. Its iterates are those of
   // CG preconditioned by the inverse blocks, and it reads no diagonal block or inverse: the link
-  // blocks, in single precision, are all the matrix it reads (the impulses below use the units).
-  std::vector<double>&X = w.x, &B = w.b, &R = w.r, &Pd = w.p, &AP = w.ap;
-  // Sized once: the passes below write every owned entry and the exchanges every partner's, and
-  // nothing reads the rest.
-  for (auto* v : {&X, &B, &R, &Pd, &AP, &w.v0})
-    if (v->size() != 6 * n) v->assign(6 * n, 0.0);
-  if (w.linv.size() != kTri * n) w.linv.assign(kTri * n, 0.0);
-  // Each owned element's L^-1 (its 21 lower entries by rows); the partners' from their owners.
-  for (int e : owned) {
-    const Block6 m = cholesky_inverse(w.diag[static_cast<std::size_t>(e)]);
-    double* t = &w.linv[kTri * static_cast<std::size_t>(e)];
-    for (int a = 0; a < 6; ++a)
-      for (int c = 0; c <= a; ++c) *t++ = m[static_cast<std::size_t>(6 * a + c)];
-  }
-  // The partners' entries of a vector of `width` numbers per element, from their owners.
-  auto share = [&](std::vector<double>& V, std::size_t width) {
-    const std::size_t m = w.neighbours.size();
-    if (m == 0) return;
-    w.send.resize(m), w.recv.resize(m);
-    w.requests.assign(2 * m, MPI_REQUEST_NULL);
-    for (std::size_t k = 0; k < m; ++k) {
-      w.recv[k].resize(width * w.recv_elements[k].size());
-      MPI_Irecv(w.recv[k].data(), static_cast<int>(w.recv[k].size()), MPI_DOUBLE, w.neighbours[k], kDampingTag,
-                decomp_.comm(), &w.requests[k]);
-    }
-    for (std::size_t k = 0; k < m; ++k) {
-      w.send[k].clear();
-      for (int e : w.send_elements[k])
-        w.send[k].insert(w.send[k].end(), &V[width * static_cast<std::size_t>(e)],
-                         &V[width * static_cast<std::size_t>(e)] + width);
-      MPI_Isend(w.send[k].data(), static_cast<int>(w.send[k].size()), MPI_DOUBLE, w.neighbours[k], kDampingTag,
-                decomp_.comm(), &w.requests[m + k]);
-    }
-    MPI_Waitall(static_cast<int>(w.requests.size()), w.requests.data(), MPI_STATUSES_IGNORE);
-    for (std::size_t k = 0; k < m; ++k)
-      for (std::size_t a = 0; a < w.recv_elements[k].size(); ++a)
-        std::copy(&w.recv[k][width * a], &w.recv[k][width * a] + width,
-                  &V[width * static_cast<std::size_t>(w.recv_elements[k][a])]);
-  };
-  share(w.linv, kTri);
-  // Each link's block scaled, L_i^-1 B L_j^-T (on both ranks of a cross link from the same numbers),
-  // then narrowed.
-  w.off_f.resize(w.links.size());
+  // blocks, in single precision, are all the matrix it reads (the impulses use the units). A link's
+  // scaled block is remade with its block or either L^-1 (a link across ranks every call: its
+  // partner's L^-1 may have changed there), on both ranks of a cross link from the same numbers.
   for (std::size_t l = 0; l < w.links.size(); ++l) {
-    const double* li = &w.linv[kTri * static_cast<std::size_t>(w.links[l].i)];
-    const double* lj = &w.linv[kTri * static_cast<std::size_t>(w.links[l].j)];
-    const Block6& O = w.off[l];
+    const DampingLink& k = w.links[l];
+    const std::size_t ei = static_cast<std::size_t>(k.i), ej = static_cast<std::size_t>(k.j);
+    if (!w.link_remade[l] && k.own_i && k.own_j && !w.remade[ei] && !w.remade[ej]) continue;
+    const double* li = &w.linv[kTri * ei];
+    const double* lj = &w.linv[kTri * ej];
+    const Block6& O = w.off[static_cast<std::size_t>(k.slot)];
     double T[36];  // L_i^-1 B: row a from B's rows 0..a
     for (int a = 0, t = 0; a < 6; ++a, t += a) {
       for (int c = 0; c < 6; ++c) T[6 * a + c] = 0;
       for (int q = 0; q <= a; ++q)
         for (int c = 0; c < 6; ++c) T[6 * a + c] += li[t + q] * O[static_cast<std::size_t>(6 * q + c)];
     }
-    Block6f& F = w.off_f[l];
+    Block6f& F = w.off_f[static_cast<std::size_t>(k.slot)];
     for (int a = 0; a < 6; ++a)
       for (int b = 0, t = 0; b < 6; ++b, t += b) {  // (T L_j^-T)_ab = sum_{c <= b} T_ac (L_j^-1)_bc
         double v = 0;
@@ -241,15 +308,42 @@ void FractureSolver::damp_bonds(double h) {
         F[static_cast<std::size_t>(6 * a + b)] = static_cast<float>(v);
       }
   }
+}
+
+void FractureSolver::damping_solve() {  // h is folded into the units and the blocks
+  const int rank = decomp_.rank();
+  const std::vector<int>& owned = owned_by_rank_[static_cast<std::size_t>(rank)];
+  DampingWork& w = damping_;
+  const std::size_t n = block_.size();
+  std::vector<double>&X = w.x, &B = w.b, &R = w.r, &Pd = w.p, &AP = w.ap;
+  // Sized once: the passes below write every owned entry and the exchanges every partner's, and
+  // nothing reads the rest.
+  for (auto* v : {&X, &B, &R, &Pd, &AP, &w.v0})
+    if (v->size() != 6 * n) v->assign(6 * n, 0.0);
   // Y = A X on the owned elements, each element's terms in the same order on any rank count (its
   // identity block, then its links in bond order); X's partners' entries are current. A link's
   // block, stored once, gives its master's rows by six row products and its slave's by six axpys
   // over the same rows.
-  auto axpy6 = [](const Block6f& M, const double* x, double* y) {
+  // Each entry's terms in the order above, summed in registers: y, x and the block may not alias, so
+  // the compiler keeps the sums there (read from and written to memory once).
+  auto rows6 = [](const Block6f& M, const double* __restrict x, double* __restrict y) {
+    double xc[6], acc[6];
+    for (int c = 0; c < 6; ++c) xc[c] = x[c];
+    for (int a = 0; a < 6; ++a) {
+      double t = 0;
+      for (int c = 0; c < 6; ++c) t += static_cast<double>(M[static_cast<std::size_t>(6 * a + c)]) * xc[c];
+      acc[a] = t;
+    }
+    for (int a = 0; a < 6; ++a) y[a] += acc[a];
+  };
+  auto axpy6 = [](const Block6f& M, const double* __restrict x, double* __restrict y) {
+    double acc[6];
+    for (int a = 0; a < 6; ++a) acc[a] = y[a];
     for (int c = 0; c < 6; ++c) {
       const double xc = x[c];
-      for (int a = 0; a < 6; ++a) y[a] += static_cast<double>(M[static_cast<std::size_t>(6 * c + a)]) * xc;
+      for (int a = 0; a < 6; ++a) acc[a] += static_cast<double>(M[static_cast<std::size_t>(6 * c + a)]) * xc;
     }
+    for (int a = 0; a < 6; ++a) y[a] = acc[a];
   };
   auto apply = [&](const std::vector<double>& Xv, std::vector<double>& Y) {
     for (int e : owned) {
@@ -259,16 +353,8 @@ void FractureSolver::damp_bonds(double h) {
     for (std::size_t l = 0; l < w.links.size(); ++l) {
       const DampingLink& k = w.links[l];
       const std::size_t i = 6 * static_cast<std::size_t>(k.i), j = 6 * static_cast<std::size_t>(k.j);
-      const Block6f& O = w.off_f[l];
-      if (k.own_i) {  // B X_j: six row products
-        const double* x = &Xv[j];
-        double* y = &Y[i];
-        for (int a = 0; a < 6; ++a) {
-          double t = 0;
-          for (int c = 0; c < 6; ++c) t += static_cast<double>(O[static_cast<std::size_t>(6 * a + c)]) * x[c];
-          y[a] += t;
-        }
-      }
+      const Block6f& O = w.off_f[static_cast<std::size_t>(k.slot)];
+      if (k.own_i) rows6(O, &Xv[j], &Y[i]);  // B X_j: six row products
       if (k.own_j) axpy6(O, &Xv[i], &Y[j]);  // B^T X_i: six axpys over B's rows
     }
   };
@@ -299,7 +385,7 @@ void FractureSolver::damp_bonds(double h) {
     const double x[6] = {v_[i].x, v_[i].y, v_[i].z, w_[i].x, w_[i].y, w_[i].z};
     std::copy(x, x + 6, &V0[6 * i]);
   }
-  share(V0, 6);
+  damping_share(V0, 6);
   // f(i, j, du, u) for every unit: du its relative velocity at the vector's values.
   auto each_unit = [&](const std::vector<double>& Vv, auto&& f) {
     for (std::size_t l = 0; l < w.links.size(); ++l) {
@@ -347,7 +433,7 @@ void FractureSolver::damp_bonds(double h) {
   int it = 0;
   std::optional<PhaseTimers::Scope> solving(std::in_place, timers_, "damping/cg");  // the iterations alone
   for (; it < kMaxDampingIterations && rr > tol2; ++it) {
-    share(Pd, 6);
+    damping_share(Pd, 6);
     apply(Pd, AP);
     const double alpha = rr / inner(Pd, AP);
     // One pass: the update and this element's share of r^T r.
@@ -385,7 +471,7 @@ void FractureSolver::damp_bonds(double h) {
   // The dashpots' impulses h D (theta du+ + (1 - theta) du) at V+ = V + dV, unit by unit, equal and
   // opposite at the vertex: linear and angular momentum are kept to round-off whatever the residual.
   each([&](std::size_t c) { X[c] += V0[c]; });
-  share(X, 6);
+  damping_share(X, 6);
   each_unit(X, [&](const DampingLink& k, const DampingUnit& u, const Vec3& du_new) {
     Vec3 du = du_new;
     if (c_old > 0) {
@@ -403,7 +489,6 @@ void FractureSolver::damp_bonds(double h) {
     const std::size_t i = static_cast<std::size_t>(e);
     w_[i] = spin(i, q_[i].unrotate(L_[i]));
   }
-  new_epoch();
 }
 
 }  // namespace tessera

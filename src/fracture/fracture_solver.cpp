@@ -193,6 +193,20 @@ void FractureSolver::choose_steps() {
     stable_level_.assign(n, 0);
     for (std::size_t e = 0; e < n; ++e) stable_level_[e] = level_for(limit[e]);
   }
+  // B9b: each element's freezing angle, at most a tenth of the theta method's margin for its
+  // stiffest dashpot mode. With every bond intact, x = h c / m <= h (max(c_n, c_s) / k_n) omega^2,
+  // omega the element's bonds' highest frequency (1 / acting_limit); the trapezoidal rule reverses
+  // such a mode with |r| ~ 1 - 4 / x, and a matrix off by a fraction d moves r by about 2 d: d = 2
+  // angle stays a tenth of 2 / x for angle <= 0.1 / x, i.e. 0.1 limit^2 / (h ratio).
+  // Kept as cos(angle / 2), the test's form.
+  frozen_cos_.assign(settings_.implicit_damping && settings_.damping ? n : 0, 1.0);
+  const double ratio = std::max(settings_.bond.cn, settings_.bond.cs) / settings_.bond.kn;
+  for (std::size_t e = 0; e < frozen_cos_.size(); ++e) {
+    const double limit = acting_limit(e, 0);
+    double angle = settings_.damping_frozen_angle;
+    if (limit < 1e299) angle = std::min(angle, 0.1 * limit * limit / (dt_ * ratio));
+    frozen_cos_[e] = std::cos(0.5 * angle);
+  }
 }
 
 int FractureSolver::level_for(double limit) const {
@@ -455,6 +469,20 @@ ContactListState FractureSolver::contact_list_state() const {
   return s;
 }
 
+std::vector<Quaternion> FractureSolver::damping_frozen() const {
+  std::vector<Quaternion> q = frozen_q_.size() == block_.size() ? frozen_q_ : q_;
+  if (decomp_.size() == 1) return q;
+  GatherBuffers buf;
+  all_gather_elements(
+      decomp_.comm(), decomp_.rank(), owned_by_rank_, 4,
+      [&](int e, double* o) {
+        const Quaternion& a = q[static_cast<std::size_t>(e)];
+        o[0] = a.w, o[1] = a.x, o[2] = a.y, o[3] = a.z;
+      },
+      [&](int e, const double* s) { q[static_cast<std::size_t>(e)] = {s[0], s[1], s[2], s[3]}; }, buf);
+  return q;
+}
+
 std::vector<std::pair<std::pair<long, long>, double>> FractureSolver::all_sunk() const {
   // B7b: every rank's sunk pairs, each once (the ranks that hold a pair hold the same depth).
   std::vector<long> keys;
@@ -480,14 +508,6 @@ double FractureSolver::deepest_born_overlap() const {
 }
 
 std::size_t FractureSolver::sunk_pairs() const { return all_sunk().size(); }
-
-FractureSolver::Pose FractureSolver::make_pose(const Vec3& x, const Vec3& v, const Vec3& w, const Quaternion& q) {
-  const double xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z, xy = q.x * q.y, xz = q.x * q.z, yz = q.y * q.z,
-               wx = q.w * q.x, wy = q.w * q.y, wz = q.w * q.z;
-  return {x, v, w, q,
-          {Vec3{1 - 2 * (yy + zz), 2 * (xy - wz), 2 * (xz + wy)}, Vec3{2 * (xy + wz), 1 - 2 * (xx + zz), 2 * (yz - wx)},
-           Vec3{2 * (xz - wy), 2 * (yz + wx), 1 - 2 * (xx + yy)}}};
-}
 
 const FractureSolver::Pose& FractureSolver::pose(std::size_t e) {
   if (pose_epoch_[e] != epoch_) {

@@ -73,6 +73,8 @@ struct FractureSettings {
   bool implicit_damping = false;     // B9a: the bond dashpots all together, backward Euler
   double damping_rtol = 1e-3;        // B9a: the solve's residual over its right-hand side (the change)
   double damping_theta = 0.5;        // B9a: 1/2 the trapezoidal rule, 1 backward Euler
+  double damping_frozen_angle = 1e-4;  // B9b: an element's frozen orientation follows it past this turn
+                                       // (rad; or a tenth of its stiffest dashpot mode's margin)
   bool skip_apart = true;            // B7a: pairs that cannot touch are not evaluated (false: tests)
   bool relax_born_overlaps = true;   // B7b: a pair listed at a release starts from its overlap then
   Partition partition = Partition::slabs;  // which rank owns each element (element_partition.hpp)
@@ -165,6 +167,10 @@ class FractureSolver {
                const std::vector<Vec3>& T);
   const std::vector<Vec3>& torque() const { return T_; }
   ContactListState contact_list_state() const;  // collective
+  // B9b: each element's frozen orientation, from its owner (collective); restart: every rank passes
+  // the same array (a checkpoint without one: the elements' orientations).
+  std::vector<Quaternion> damping_frozen() const;
+  void set_damping_frozen(const std::vector<Quaternion>& q) { frozen_q_ = q; }
   const std::vector<Vec3>& angular_momentum() const { return L_; }
 
   FractureEnergies energies() const;  // collective; bond energy of the elastic law (B2)
@@ -195,7 +201,14 @@ class FractureSolver {
     Vec3 rot(const Vec3& a) const { return {dot(R[0], a), dot(R[1], a), dot(R[2], a)}; }
     Vec3 unrot(const Vec3& a) const { return R[0] * a.x + R[1] * a.y + R[2] * a.z; }  // world -> body
   };
-  static Pose make_pose(const Vec3& x, const Vec3& v, const Vec3& w, const Quaternion& q);
+  // Inline: the sub-steps build two for every pair they evaluate.
+  static Pose make_pose(const Vec3& x, const Vec3& v, const Vec3& w, const Quaternion& q) {
+    const double xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z, xy = q.x * q.y, xz = q.x * q.z, yz = q.y * q.z,
+                 wx = q.w * q.x, wy = q.w * q.y, wz = q.w * q.z;
+    return {x, v, w, q,
+            {Vec3{1 - 2 * (yy + zz), 2 * (xy - wz), 2 * (xz + wy)}, Vec3{2 * (xy + wz), 1 - 2 * (xx + zz), 2 * (yz - wx)},
+             Vec3{2 * (xz - wy), 2 * (yz + wx), 1 - 2 * (xx + yy)}}};
+  }
   struct Sphere {
     int element;
     Vec3 centre;  // body frame
@@ -216,7 +229,11 @@ class FractureSolver {
   double acting_limit(std::size_t e, double pairs) const;
   int level_for(double limit) const;  // the smallest k with dt0 / 2^k <= limit (at most max_level)
   void choose_steps();  // dt_ and, with stability levels, each element's level (B9, B10)
-  Pose pose_at(std::size_t e, double t) const;  // on its piecewise-linear path (B10)
+  // On its piecewise-linear path (B10); at its own clock (every read with stability levels), inline.
+  Pose pose_at(std::size_t e, double t) const {
+    return t == t_el_[e] ? make_pose(x_[e], v_[e], w_[e], q_[e]) : pose_ahead(e, t);
+  }
+  Pose pose_ahead(std::size_t e, double t) const;
   void assign_levels();
   void advance_to(std::size_t e, double t);  // drift (x, q) from its clock to t
   void advance_all(const std::vector<int>& elements, double t);  // advance_to on each, interleaved
@@ -239,6 +256,10 @@ class FractureSolver {
   }
   void multirate_step();
   void damp_bonds(double h);  // B9a: the bond dashpots over h, all bonds together (fracture_damping.cpp)
+  void damping_links(double h);   // its stages: the intact bonds here, their units now, who travels
+  void damping_matrix(double h);  // M + theta h C at the frozen orientations, scaled (B9b)
+  void damping_solve();           // the right-hand side, CG, the impulses
+  void damping_share(std::vector<double>& V, std::size_t width);  // the partners' entries, from their owners
   void build_halo(int K);               // the cross pairs' elements by rank and level (every macro step)
   void exchange_halo(int first, int K);  // the due ones' states, to and from the neighbour ranks
   static void clear_buckets(std::vector<std::vector<int>>& buckets, int count);  // at least count, all empty
@@ -403,15 +424,30 @@ class FractureSolver {
     double an, at;
   };
   struct DampingLink {  // one intact bond with an element here
-    int i, j;
+    int bond, i, j;
+    int slot;  // its kept blocks (DampingWork)
     bool own_i, own_j;
   };
+  using Lower6 = std::array<double, 21>;  // a symmetric 6 x 6 block's lower triangle, by rows
   struct DampingWork {
-    std::vector<DampingUnit> units;  // three per link
+    std::vector<DampingUnit> units;  // three per link, at the elements' orientations now
     std::vector<DampingLink> links;
-    std::vector<Block6> diag, off;  // per element (owned), per link
-    std::vector<double> linv;       // per element: its diagonal block's L^-1 (21 lower entries by rows)
-    std::vector<Block6f> off_f;     // per link: its block scaled, L_i^-1 B L_j^-T, in single precision
+    // B9b: the matrix at the frozen orientations, kept between calls. A bond with an element here
+    // has a slot (in bond order, from the first call); per slot its terms in its master's and slave's
+    // diagonal blocks, its off-diagonal block and that block scaled, L_i^-1 B L_j^-T, in single
+    // precision; live while it is intact and built.
+    std::vector<int> slot;  // per bond, -1: none
+    std::vector<char> live;
+    std::vector<Lower6> to_i, to_j;
+    std::vector<Block6> off;
+    std::vector<Block6f> off_f;
+    double h = 0;                    // the step the kept blocks are for (0: none yet)
+    std::vector<Pose> frozen;        // per element: its pose at its frozen orientation (R only)
+    std::vector<char> turned;        // per element, this call: its frozen orientation moved
+    std::vector<char> remade;        // per element, this call: its diagonal block (and L^-1) remade
+    std::vector<char> link_remade;   // per link, this call: its blocks remade
+    std::vector<Block6> diag;        // per element (owned): its diagonal block (lower triangle read)
+    std::vector<double> linv;        // per element: its diagonal block's L^-1 (21 lower entries by rows)
     std::vector<double> x, b, r, p, ap;
     std::vector<double> v0;           // theta < 1: the velocities before
     std::vector<std::array<int, 2>> sent, read;
@@ -421,6 +457,8 @@ class FractureSolver {
     std::vector<MPI_Request> requests;
   };
   DampingWork damping_;
+  std::vector<Quaternion> frozen_q_;  // B9b: per element, the orientation its damping blocks are made at
+  std::vector<double> frozen_cos_;  // B9b: per element, cos(angle / 2) of the turn past which it follows
   static constexpr int kDampingTag = 1718;
   static constexpr std::size_t kTri = 21;  // a 6 x 6 lower triangle's entries
   static constexpr int kMaxDampingIterations = 1000;
