@@ -15,6 +15,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "app/balance_record.hpp"
 #include "app/blast_case.hpp"
 #include "app/run_loop.hpp"
 #include "app/scenes.hpp"
@@ -118,6 +119,9 @@ class BlastScene final : public SteppedScene {
     probe_time_ = root.section("blast").real("probe_time", Dim::time, Range::positive(), 5e-4);
     decomp_ = std::make_unique<Decomposition>(comm, c.lo, c.hi, c.grid);
     solver_ = std::make_unique<FractureSolver>(*decomp_, build_bonded_block(c.mesh, c.settings.density), c.settings, c.hole);
+    balance_.read(root);
+    if (balance_.measure_time)
+      throw InputError("balance.measure", "time", "counts (the blast's work is counted from its levels and pairs)");
     const auto& hole = c.hole;
     read_loop_keys(root, true);
     // The probe: the element whose initial centroid is nearest the hole's axis (lowest index on a tie).
@@ -165,6 +169,12 @@ class BlastScene final : public SteppedScene {
   }
 
   bool after_step(const RunOptions&) override {
+    // Issue 19: every balance.interval macro steps, the work now (levels, intact bonds, listed
+    // pairs) over the owners; past the threshold, a new partition (FractureSolver::rebalance).
+    if (balance_.due(solver_->steps(), decomp_->size())) {
+      const double before = solver_->imbalance_now();
+      if (balance_.over_threshold(before)) balance_.rebalanced(solver_->steps(), before, solver_->rebalance());
+    }
     if (solver_->steps() % 1000 == 0) {
       // Blow-up check (positions are replicated: every rank decides alike).
       for (const Vec3& x : solver_->x())
@@ -192,6 +202,7 @@ class BlastScene final : public SteppedScene {
 
   std::unique_ptr<Decomposition> decomp_;
   std::unique_ptr<FractureSolver> solver_;
+  BalanceRecord balance_;
   std::string mesh_file_, out_dir_;
   double probe_time_ = 5e-4, probe_displacement_ = 0;
   long probe_ = -1;
@@ -548,6 +559,7 @@ void BlastScene::summarise(nlohmann::json& s) {
                     {"planned_substep_imbalance", substep_imbalance(solver_->planned_level_work())},
                     {"planned_level_imbalance", level_imbalance(solver_->planned_level_work())},
                     {"cut_bonds", solver_->cut_bond_count()}};
+  if (balance_.enabled) s["balance"] = balance_.summary();
   s["output"] = {{"checkpoint", "checkpoint.h5"},
                  {"snapshots", snapshots_.empty() ? "" : "elements.xmf, cracks.xmf"}};
 }

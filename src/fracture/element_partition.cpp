@@ -24,7 +24,8 @@ const char* partition_name(Partition p) {
   return p == Partition::metis ? "metis" : (p == Partition::balanced ? "balanced" : "slabs");
 }
 
-ElementWork element_work(const BondedBlock& block, const std::vector<int>& level) {
+ElementWork element_work(const BondedBlock& block, const std::vector<int>& level, const std::vector<char>& broken,
+                         const std::vector<std::array<int, 2>>& contacts) {
   ElementWork w;
   w.level = level;
   w.bond.resize(block.bonds.size());
@@ -33,8 +34,17 @@ ElementWork element_work(const BondedBlock& block, const std::vector<int>& level
     const auto i = static_cast<std::size_t>(block.bonds[b].master), j = static_cast<std::size_t>(block.bonds[b].slave);
     const int k = std::max(level[i], level[j]);
     w.bond_level[b] = k;
+    if (!broken.empty() && broken[b]) continue;  // no work (its edge stays in METIS's graph, weightless)
     w.bond[b] = kBondCostPerUpdate * std::ldexp(1.0, k);
-    w.level[i] = std::max(w.level[i], k), w.level[j] = std::max(w.level[j], k);  // kicked at its finest bond's level
+    w.level[i] = std::max(w.level[i], k), w.level[j] = std::max(w.level[j], k);  // kicked at its finest pair's level
+  }
+  w.contact = contacts;
+  w.contact_level.resize(contacts.size());
+  for (std::size_t c = 0; c < contacts.size(); ++c) {
+    const auto i = static_cast<std::size_t>(contacts[c][0]), j = static_cast<std::size_t>(contacts[c][1]);
+    const int k = std::max(level[i], level[j]);
+    w.contact_level[c] = k;
+    w.level[i] = std::max(w.level[i], k), w.level[j] = std::max(w.level[j], k);
   }
   w.element.resize(block.size());
   for (std::size_t e = 0; e < block.size(); ++e) w.element[e] = std::ldexp(1.0, level[e]);
@@ -64,6 +74,10 @@ VertexWeights sum_weights(const BondedBlock& block, const ElementWork& work) {
     w.weight[static_cast<std::size_t>(block.bonds[b].master)] += half;
     w.weight[static_cast<std::size_t>(block.bonds[b].slave)] += half;
   }
+  for (std::size_t c = 0; c < work.contact.size(); ++c) {
+    const double half = 0.5 * kContactCostPerUpdate * std::ldexp(1.0, work.contact_level[c]);
+    w.weight[static_cast<std::size_t>(work.contact[c][0])] += half, w.weight[static_cast<std::size_t>(work.contact[c][1])] += half;
+  }
   return w;
 }
 
@@ -76,8 +90,14 @@ VertexWeights level_weights(const BondedBlock& block, const ElementWork& work) {
     for (std::size_t f = 0; f <= static_cast<std::size_t>(work.level[e]); ++f) w.weight[e * nc + f] += 1.0;
   for (std::size_t b = 0; b < block.bonds.size(); ++b) {
     const auto i = static_cast<std::size_t>(block.bonds[b].master), j = static_cast<std::size_t>(block.bonds[b].slave);
+    if (work.bond[b] == 0) continue;  // broken
     for (std::size_t f = 0; f <= static_cast<std::size_t>(work.bond_level[b]); ++f)
       w.weight[i * nc + f] += 0.5 * kBondCostPerUpdate, w.weight[j * nc + f] += 0.5 * kBondCostPerUpdate;
+  }
+  for (std::size_t c = 0; c < work.contact.size(); ++c) {
+    const auto i = static_cast<std::size_t>(work.contact[c][0]), j = static_cast<std::size_t>(work.contact[c][1]);
+    for (std::size_t f = 0; f <= static_cast<std::size_t>(work.contact_level[c]); ++f)
+      w.weight[i * nc + f] += 0.5 * kContactCostPerUpdate, w.weight[j * nc + f] += 0.5 * kContactCostPerUpdate;
   }
   return w;
 }
@@ -98,7 +118,7 @@ std::vector<int> metis_parts(const BondedBlock& block, const ElementWork& work, 
   std::vector<idx_t> fill(xadj.begin(), xadj.end() - 1);
   for (std::size_t b = 0; b < block.bonds.size(); ++b) {
     const auto i = static_cast<std::size_t>(block.bonds[b].master), j = static_cast<std::size_t>(block.bonds[b].slave);
-    const auto wb = static_cast<idx_t>(std::lround(10 * work.bond[b]));
+    const auto wb = std::max<idx_t>(1, static_cast<idx_t>(std::lround(10 * work.bond[b])));
     adjncy[static_cast<std::size_t>(fill[i])] = static_cast<idx_t>(j), adjwgt[static_cast<std::size_t>(fill[i]++)] = wb;
     adjncy[static_cast<std::size_t>(fill[j])] = static_cast<idx_t>(i), adjwgt[static_cast<std::size_t>(fill[j]++)] = wb;
   }
@@ -155,6 +175,12 @@ std::vector<double> part_work(const BondedBlock& block, const ElementWork& work,
     w[static_cast<std::size_t>(pi)] += work.bond[b];
     if (pj != pi) w[static_cast<std::size_t>(pj)] += work.bond[b];
   }
+  for (std::size_t c = 0; c < work.contact.size(); ++c) {
+    const int pi = part[static_cast<std::size_t>(work.contact[c][0])], pj = part[static_cast<std::size_t>(work.contact[c][1])];
+    const double visits = kContactCostPerUpdate * std::ldexp(1.0, work.contact_level[c]);
+    w[static_cast<std::size_t>(pi)] += visits;
+    if (pj != pi) w[static_cast<std::size_t>(pj)] += visits;
+  }
   return w;
 }
 
@@ -172,9 +198,17 @@ std::vector<std::vector<double>> part_level_work(const BondedBlock& block, const
     for (std::size_t f = 0; f <= static_cast<std::size_t>(work.level[e]); ++f) w[f][static_cast<std::size_t>(part[e])] += 1.0;
   for (std::size_t b = 0; b < block.bonds.size(); ++b) {
     const int pi = part[static_cast<std::size_t>(block.bonds[b].master)], pj = part[static_cast<std::size_t>(block.bonds[b].slave)];
+    if (work.bond[b] == 0) continue;  // broken
     for (std::size_t f = 0; f <= static_cast<std::size_t>(work.bond_level[b]); ++f) {
       w[f][static_cast<std::size_t>(pi)] += kBondCostPerUpdate;
       if (pj != pi) w[f][static_cast<std::size_t>(pj)] += kBondCostPerUpdate;
+    }
+  }
+  for (std::size_t c = 0; c < work.contact.size(); ++c) {
+    const int pi = part[static_cast<std::size_t>(work.contact[c][0])], pj = part[static_cast<std::size_t>(work.contact[c][1])];
+    for (std::size_t f = 0; f <= static_cast<std::size_t>(work.contact_level[c]); ++f) {
+      w[f][static_cast<std::size_t>(pi)] += kContactCostPerUpdate;
+      if (pj != pi) w[f][static_cast<std::size_t>(pj)] += kContactCostPerUpdate;
     }
   }
   return w;

@@ -31,14 +31,25 @@ const char* partition_name(Partition p);
 // One evaluation of a bond costs this many element updates (measured 2026-11-30 on the fine block,
 // 102,975 elements, stability levels, one rank: 230 ns per bond evaluation, 163 ns per update).
 constexpr double kBondCostPerUpdate = 1.4;
+// A listed contact pair's visit at a sub-step (its may-touch test, and its force where it may touch)
+// costs this many element updates (2026-12-07, the fine block on 2 ranks: 128 s for 1.0e9 evaluations
+// against 92 s for 0.88e9 updates a rank, with most visits a test only).
+constexpr double kContactCostPerUpdate = 0.6;
 
 struct ElementWork {
   std::vector<double> element;  // per element: updates per macro step
-  std::vector<double> bond;     // per bond: evaluations per macro step times kBondCostPerUpdate
-  std::vector<int> level;       // per element: the level it is updated at (its own or a bond's finer one)
+  std::vector<double> bond;     // per bond: evaluations per macro step times kBondCostPerUpdate (0: broken)
+  std::vector<int> level;       // per element: the level it is updated at (its own or a pair's finer one)
   std::vector<int> bond_level;  // per bond: the finer of its two elements' levels
+  // Listed contact pairs (a rebalance during a run): each sphere pair's two elements, visited at the
+  // finer one's level at kContactCostPerUpdate, on both ranks when they differ.
+  std::vector<std::array<int, 2>> contact;
+  std::vector<int> contact_level;
 };
-ElementWork element_work(const BondedBlock& block, const std::vector<int>& level);
+// At the start: levels, every bond intact, no contact. During a run (a rebalance): the broken
+// bonds (per bond, nonzero: broken) do no work and draw no level; `contacts` as ElementWork::contact.
+ElementWork element_work(const BondedBlock& block, const std::vector<int>& level, const std::vector<char>& broken = {},
+                         const std::vector<std::array<int, 2>>& contacts = {});
 
 // Each element's part in [0, parts): for slabs and balanced the grid cell (x fastest) of
 // dims = {nx, ny, nz} over the box [lo, hi]; for metis the METIS part (parts = nx ny nz).

@@ -140,18 +140,23 @@ void FractureSolver::assign_levels() {
     // A listed pair counts when it may touch within the macro step: its spheres' gap now within
     // twice what its two elements can travel in dt0 at their speeds now (centroid and farthest
     // vertex's turn). From the state alone, so that a restart takes the same levels.
-    auto speed = [&](std::size_t e) { return norm(v_[e]) + norm(w_[e]) * reach_[e]; };
+    std::vector<double>& speed = scratch_speed_;
+    speed.resize(n);
+    for (std::size_t e = 0; e < n; ++e) speed[e] = norm(v_[e]) + norm(w_[e]) * reach_[e];
     for (const ListedPair& lp : pairs_) {
       const std::size_t a = static_cast<std::size_t>(lp.ea), b = static_cast<std::size_t>(lp.eb);
       const double gap = norm(sphere_position(static_cast<std::size_t>(lp.second)) - sphere_position(static_cast<std::size_t>(lp.first))) -
                          spheres_[static_cast<std::size_t>(lp.first)].radius - spheres_[static_cast<std::size_t>(lp.second)].radius;
-      if (gap > 2 * dt_ * (speed(a) + speed(b))) continue;
+      if (gap > 2 * dt_ * (speed[a] + speed[b])) continue;
       pairs[a] += 1, pairs[b] += 1;
     }
     // Never finer than B9's bound (every face bonded and pressed by all its spheres), which the
     // explicit scheme's levels take: a count of pairs that may touch can exceed it.
-    for (std::size_t e = 0; e < n; ++e)
-      level_[e] = level_for(settings_.stability_factor * std::max(acting_limit(e, pairs[e]), b9_limit_[e]));
+    // Each rank its own elements (the others' stay 0: the owner's level is the largest).
+    for (int e : owned_by_rank_[static_cast<std::size_t>(decomp_.rank())]) {
+      const std::size_t i = static_cast<std::size_t>(e);
+      level_[i] = level_for(settings_.stability_factor * std::max(acting_limit(i, pairs[i]), b9_limit_[i]));
+    }
     if (decomp_.size() > 1)
       MPI_Allreduce(MPI_IN_PLACE, level_.data(), static_cast<int>(n), MPI_INT, MPI_MAX, decomp_.comm());
     return;

@@ -151,6 +151,12 @@ class FractureSolver {
     return part_level_work(block_, work_, owner_, decomp_.size());
   }
   const ElementWork& work() const { return work_; }
+  // Collective, between macro steps (issue 19): the sub-steps' imbalance (substep_imbalance) of the
+  // work now (the last macro step's levels, the intact bonds, the listed contact pairs) on the
+  // owners now; and a new partition of that work, the state carried over as a restart carries it
+  // (the same bits as without), returning the new owners' imbalance.
+  double imbalance_now() const;
+  double rebalance();
   bool owns(std::size_t e) const { return owner_[e] == decomp_.rank(); }
   // Collective: every rank takes the owners' full state of elements and bonds (before output).
   void sync_state();
@@ -315,6 +321,8 @@ class FractureSolver {
   }
   Vec3 sphere_position(std::size_t s) const;
   double stable_dt() const;
+  void assign_owners();  // owner_ and owned_by_rank_ from a partition of work_ (collective)
+  ElementWork work_now(const ContactListState& list) const;
 
   const Decomposition& decomp_;
   BondedBlock block_;
