@@ -59,6 +59,7 @@ FractureSettings read_fracture_settings(const ConfigNode& blast) {
   s.damping_rtol = blast.real("damping_rtol", Dim::none, Range::positive(), s.damping_rtol);
   s.damping_theta = blast.real("damping_theta", Dim::none, Range::closed(0.5, 1), s.damping_theta);
   s.damping_frozen_angle = blast.real("damping_frozen_angle", Dim::none, Range::non_negative(), s.damping_frozen_angle);
+  s.damping_interval = static_cast<int>(blast.integer("damping_interval", 1, 64, s.damping_interval));
   const std::string stepping = blast.choice("stepping", {"uniform", "travel", "stability"}, "uniform");
   s.stepping = stepping == "travel" ? Stepping::travel : (stepping == "stability" ? Stepping::stability : Stepping::uniform);
   s.travel_limit = blast.real("travel_limit", Dim::length, Range::positive(), s.travel_limit);

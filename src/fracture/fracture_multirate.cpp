@@ -468,12 +468,12 @@ void FractureSolver::multirate_step() {
     advance_all(owned_by_rank_[static_cast<std::size_t>(rank)], time_);
     std::fill(t_el_.begin(), t_el_.end(), time_);
     if (P > 1) exchange_elements(owned_by_rank_);
-    if (acting) {
+    if (acting && steps_ % settings_.damping_interval == 0) {
       // B9a: the bond dashpots over the macro step, all together, at the states of its end; the
       // velocities they change travel again.
       {
         auto t = timers_.scope("damping");
-        damp_bonds(dt_);
+        damp_bonds(settings_.damping_interval * dt_);
       }
       if (P > 1) exchange_elements(owned_by_rank_);
     }

@@ -187,7 +187,7 @@ void FractureSolver::choose_steps() {
   for (std::size_t e = 0; e < frozen_cos_.size(); ++e) {
     const double limit = acting_limit(e, 0);
     double angle = settings_.damping_frozen_angle;
-    if (limit < 1e299) angle = std::min(angle, 0.1 * limit * limit / (dt_ * ratio));
+    if (limit < 1e299) angle = std::min(angle, 0.1 * limit * limit / (settings_.damping_interval * dt_ * ratio));
     frozen_cos_[e] = std::cos(0.5 * angle);
   }
 }
@@ -239,7 +239,7 @@ void FractureSolver::step() {
   }
   {
     auto t = timers_.scope("damping");
-    damp_bonds(dt_);
+    if ((steps_ + 1) % settings_.damping_interval == 0) damp_bonds(settings_.damping_interval * dt_);  // B9c
   }
   {
     auto t = timers_.scope("broken");

@@ -74,6 +74,7 @@ struct FractureSettings {
   double damping_rtol = 1e-3;        // B9a: the solve's residual over its right-hand side (the change)
   double damping_theta = 0.5;        // B9a: 1/2 the trapezoidal rule, 1 backward Euler
   double damping_frozen_angle = 1e-4;  // B9b: an element's frozen orientation follows it past this turn
+  int damping_interval = 1;  // B9c: the dashpots solved every this many macro steps, over as many
                                        // (rad; or a tenth of its stiffest dashpot mode's margin)
   bool skip_apart = true;            // B7a: pairs that cannot touch are not evaluated (false: tests)
   bool relax_born_overlaps = true;   // B7b: a pair listed at a release starts from its overlap then
