@@ -143,19 +143,34 @@ void FractureSolver::assign_levels() {
     std::vector<double>& speed = scratch_speed_;
     speed.resize(n);
     for (std::size_t e = 0; e < n; ++e) speed[e] = norm(v_[e]) + norm(w_[e]) * reach_[e];
+    std::vector<Vec3>& levers = scratch_levers_;
+    levers.assign(n, Vec3{});
     for (const ListedPair& lp : pairs_) {
       const std::size_t a = static_cast<std::size_t>(lp.ea), b = static_cast<std::size_t>(lp.eb);
-      const double gap = norm(sphere_position(static_cast<std::size_t>(lp.second)) - sphere_position(static_cast<std::size_t>(lp.first))) -
-                         spheres_[static_cast<std::size_t>(lp.first)].radius - spheres_[static_cast<std::size_t>(lp.second)].radius;
+      const Vec3 pa = sphere_position(static_cast<std::size_t>(lp.first)), pb = sphere_position(static_cast<std::size_t>(lp.second));
+      const Vec3 d = pb - pa;
+      const double dist = norm(d);
+      const double gap = dist - spheres_[static_cast<std::size_t>(lp.first)].radius - spheres_[static_cast<std::size_t>(lp.second)].radius;
       if (gap > 2 * dt_ * (speed[a] + speed[b])) continue;
       pairs[a] += 1, pairs[b] += 1;
+      // Each side's lever (r x n) in its body frame, squared per principal axis; coincident
+      // centres (no direction): the farthest vertex's reach about every axis, a bound.
+      for (const auto& [e, p] : {std::pair{a, pa}, std::pair{b, pb}}) {
+        if (dist == 0) {
+          const double r2 = reach_[e] * reach_[e];
+          levers[e] += Vec3{r2, r2, r2};
+          continue;
+        }
+        const Vec3 t = q_[e].unrotate(cross(p - x_[e], d / dist));
+        levers[e] += Vec3{t.x * t.x, t.y * t.y, t.z * t.z};
+      }
     }
     // Never finer than B9's bound (every face bonded and pressed by all its spheres), which the
     // explicit scheme's levels take: a count of pairs that may touch can exceed it.
     // Each rank its own elements (the others' stay 0: the owner's level is the largest).
     for (int e : owned_by_rank_[static_cast<std::size_t>(decomp_.rank())]) {
       const std::size_t i = static_cast<std::size_t>(e);
-      level_[i] = level_for(settings_.stability_factor * std::max(acting_limit(i, pairs[i]), b9_limit_[i]));
+      level_[i] = level_for(settings_.stability_factor * std::max(acting_limit(i, pairs[i], levers[i]), b9_limit_[i]));
     }
     if (decomp_.size() > 1)
       MPI_Allreduce(MPI_IN_PLACE, level_.data(), static_cast<int>(n), MPI_INT, MPI_MAX, decomp_.comm());

@@ -131,12 +131,13 @@ double FractureSolver::element_limit(std::size_t e) const {
                    std::sqrt(I.z / k_rot[2])});
 }
 
-double FractureSolver::acting_limit(std::size_t e, double pairs) const {
-  // B9a: the springs that act now: the intact bonds' k_n A on their faces, and k_c for each listed
-  // contact pair of the element at its farthest vertex's lever (a bound).
-  double k = pairs * settings_.contact_stiffness, k_rot[3];
-  const double reach2 = reach_[e] * reach_[e];
-  for (double& kr : k_rot) kr = k * reach2;
+double FractureSolver::acting_limit(std::size_t e, double pairs, const Vec3& levers) const {
+  // B9a: the springs that act now. The intact bonds' k_n A on their faces: the largest of their
+  // translational and per-axis rotational frequencies (B9's form). The contact pairs that may touch:
+  // each a spring k_c along n at the sphere's centre r, a rank-one stiffness whose frequency squared
+  // is k_c (1/m + sum_a (r x n)_a^2 / I_a) exactly; `levers` sums (r x n)_a^2 over the pairs. The
+  // squares add (the largest eigenvalue of a sum is at most the sum of theirs).
+  double k = 0, k_rot[3] = {0, 0, 0};
   for (int b : element_bonds_[e]) {
     if (!broken_.empty() && broken_[static_cast<std::size_t>(b)]) continue;  // (none yet at set-up)
     const BondGeometry& g = block_.bonds[static_cast<std::size_t>(b)];
@@ -145,10 +146,13 @@ double FractureSolver::acting_limit(std::size_t e, double pairs) const {
     k += kf;
     for (int ax = 0; ax < 3; ++ax) k_rot[ax] += kf * fk[ax];
   }
-  if (k == 0) return 1e300;  // free: no spring acts on it
   const Vec3& I = block_.inertia[e];
-  return std::min({std::sqrt(block_.mass[e] / k), std::sqrt(I.x / k_rot[0]), std::sqrt(I.y / k_rot[1]),
-                   std::sqrt(I.z / k_rot[2])});
+  const double m = block_.mass[e];
+  const double bonds = std::max({k / m, k_rot[0] / I.x, k_rot[1] / I.y, k_rot[2] / I.z});
+  const double contacts = settings_.contact_stiffness * (pairs / m + levers.x / I.x + levers.y / I.y + levers.z / I.z);
+  const double omega2 = bonds + contacts;
+  if (omega2 == 0) return 1e300;  // free: no spring acts on it
+  return 1 / std::sqrt(omega2);
 }
 
 double FractureSolver::stable_dt() const {
@@ -168,7 +172,7 @@ void FractureSolver::choose_steps() {
     b9_limit_.assign(acting ? n : 0, 0.0);
     double largest = 0;
     for (std::size_t e = 0; e < n; ++e) {
-      limit[e] = settings_.stability_factor * (acting ? acting_limit(e, 0) : element_limit(e));
+      limit[e] = settings_.stability_factor * (acting ? acting_limit(e, 0, {}) : element_limit(e));
       if (acting) b9_limit_[e] = element_limit(e);
       if (limit[e] < 1e299) largest = std::max(largest, limit[e]);
     }
@@ -185,7 +189,7 @@ void FractureSolver::choose_steps() {
   frozen_cos_.assign(settings_.implicit_damping && settings_.damping ? n : 0, 1.0);
   const double ratio = std::max(settings_.bond.cn, settings_.bond.cs) / settings_.bond.kn;
   for (std::size_t e = 0; e < frozen_cos_.size(); ++e) {
-    const double limit = acting_limit(e, 0);
+    const double limit = acting_limit(e, 0, {});
     double angle = settings_.damping_frozen_angle;
     if (limit < 1e299) angle = std::min(angle, 0.1 * limit * limit / (settings_.damping_interval * dt_ * ratio));
     frozen_cos_[e] = std::cos(0.5 * angle);

@@ -233,7 +233,7 @@ class FractureSolver {
   void unpack_state(std::size_t i, bool momentum, const double* s);
   double element_limit(std::size_t e) const;
   // B9a: the stable step of the springs that act now (intact bonds, `pairs` listed contact pairs).
-  double acting_limit(std::size_t e, double pairs) const;
+  double acting_limit(std::size_t e, double pairs, const Vec3& levers) const;
   int level_for(double limit) const;  // the smallest k with dt0 / 2^k <= limit (at most max_level)
   void choose_steps();  // dt_ and, with stability levels, each element's level (B9, B10)
   // On its piecewise-linear path (B10); at its own clock (every read with stability levels), inline.
@@ -393,7 +393,8 @@ class FractureSolver {
   std::vector<char> stale_;
   // Storage reused every macro step: mark_stale's speeds and partners' fastest, build_list's positions.
   std::vector<double> scratch_speed_, scratch_fastest_;
-  std::vector<double> scratch_pairs_;  // B9a: each element's listed pairs
+  std::vector<double> scratch_pairs_;  // B9a: each element's listed pairs that may touch
+  std::vector<Vec3> scratch_levers_;   // B9a: and their levers' squares about its principal axes
   std::vector<Vec3> scratch_at_;
   GatherBuffers gather_;
   std::vector<std::vector<int>> due_;  // the multirate step's due elements per rank

@@ -30,6 +30,7 @@
 #include <gtest/gtest.h>
 #include <mpi.h>
 
+#include <Eigen/Dense>
 #include <Eigen/Sparse>
 #include <cmath>
 #include <cstdio>
@@ -208,6 +209,78 @@ TEST(Multirate, ElementsOnDifferentLevelsCollideConservingMomentum) {
     EXPECT_NE(f.v()[0].x, 0.0) << "the large one was pushed";
     EXPECT_LT(norm(momentum() - p0), 1e-13 * norm(p0));
     EXPECT_GT(f.v()[1].x, -2.0) << "the small one was slowed";
+  }
+}
+
+// B9a's level of an element held by contact pairs alone: the pairs that may touch (at rest: those
+// that overlap) make a stiffness K = k_c sum J^T J (J = [n, r x n], r from the centroid to the
+// pair's sphere) whose largest frequency, with the element's mass and world inertia, the level must
+// resolve (stable), and whose bound k_c sum (1/m + sum_a (r x n)_a^2 / I_a) (each rank-one term's
+// exact frequency, the terms' sum) sets it. Two mirror-image tetrahedra, their face released and
+// the lower one pressed 0.1 mm in: the face's six pairs and the side faces' pairs near its edges.
+TEST(Multirate, ContactLevelsResolveThePairsExactFrequency) {
+  const double a = 0.05, h = 0.04, depth = 1e-4, dt0 = 1e-6;
+  FractureSettings s;
+  s.stepping = Stepping::stability;
+  s.implicit_damping = true;  // B9a's levels: the springs that act
+  s.time_step = dt0;          // no bond intact: no macro step from the bonds
+  World w(MPI_COMM_SELF, mirrored_pair(a, h), s, {-0.1, -0.1, -0.1}, {0.1, 0.1, 0.1});
+  FractureSolver& f = w.solver;
+  const BondedBlock& b = f.block();
+  std::vector<Vec3> x = b.x0;
+  const std::size_t low = b.x0[0].z < 0 ? 0 : 1;
+  x[low].z += depth;
+  const std::vector<Vec3> zero(2);
+  ContactListState list;
+  list.unlisted = {0};
+  f.restore(x, b.q0, zero, zero, std::vector<std::array<BondVertex, 3>>(1), {1}, list, zero, zero);
+  f.setup();
+  f.step();  // at rest: the pairs born overlapping keep their depth (B7b), nothing moves
+  // Every element's spheres (all four faces: three on the surface, the released one), in world frame.
+  struct Placed {
+    Vec3 c;
+    double r;
+  };
+  std::vector<Placed> spheres[2];
+  for (std::size_t e = 0; e < 2; ++e)
+    for (int face = 0; face < 4; ++face)
+      for (const FaceSphere& fs : face_spheres(b.vertices[e], face, s.sphere_divisions))
+        spheres[e].push_back({x[e] + b.q0[e].rotate(fs.centre), fs.radius});
+  for (std::size_t e = 0; e < 2; ++e) {
+    Eigen::Matrix<double, 6, 6> K = Eigen::Matrix<double, 6, 6>::Zero(), M = Eigen::Matrix<double, 6, 6>::Zero();
+    double bound = 0;
+    int pairs = 0;
+    const Vec3& I = b.inertia[e];
+    for (const Placed& p : spheres[e])
+      for (const Placed& o : spheres[1 - e]) {
+        const Vec3 d = o.c - p.c;
+        if (norm(d) - p.r - o.r > 0) continue;
+        ++pairs;
+        const Vec3 n = d / norm(d), rn = cross(p.c - x[e], n), t = b.q0[e].unrotate(rn);
+        Eigen::Matrix<double, 6, 1> J;
+        J << n.x, n.y, n.z, rn.x, rn.y, rn.z;
+        K += s.contact_stiffness * J * J.transpose();
+        bound += s.contact_stiffness * (1 / b.mass[e] + t.x * t.x / I.x + t.y * t.y / I.y + t.z * t.z / I.z);
+      }
+    ASSERT_GE(pairs, 6) << "the released face's six pairs at least";
+    // M: the mass, and the world inertia R diag(I) R^T.
+    Eigen::Matrix3d R;
+    for (int c = 0; c < 3; ++c) {
+      const Vec3 col = b.q0[e].rotate(Vec3{c == 0 ? 1.0 : 0.0, c == 1 ? 1.0 : 0.0, c == 2 ? 1.0 : 0.0});
+      R.col(c) << col.x, col.y, col.z;
+    }
+    M.topLeftCorner<3, 3>() = b.mass[e] * Eigen::Matrix3d::Identity();
+    M.bottomRightCorner<3, 3>() = R * Eigen::Vector3d(I.x, I.y, I.z).asDiagonal() * R.transpose();
+    const double exact = Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>(K, M, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
+    int expected = 0;  // the smallest level whose step is within the factor of the bound's period
+    while (std::ldexp(dt0, -expected) > s.stability_factor / std::sqrt(bound)) ++expected;
+    const int level = f.levels()[e];
+    std::printf("element %zu: %d pairs, largest frequency %.4g rad/s (bound %.4g), level %d\n", e, pairs,
+                std::sqrt(exact), std::sqrt(bound), level);
+    EXPECT_LE(exact, bound * (1 + 1e-12)) << "the bound bounds";
+    EXPECT_GT(exact, 0.2 * bound) << "and not by much here";
+    EXPECT_EQ(level, expected) << "the level of the bound, element " << e;
+    EXPECT_LE(std::ldexp(dt0, -level) * std::sqrt(exact), s.stability_factor) << "resolved, element " << e;
   }
 }
 
