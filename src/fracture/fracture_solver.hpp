@@ -232,7 +232,8 @@ class FractureSolver {
   void pack_state(std::size_t i, bool momentum, double* o) const;
   void unpack_state(std::size_t i, bool momentum, const double* s);
   double element_limit(std::size_t e) const;
-  // B9a: the stable step of the springs that act now (intact bonds, `pairs` listed contact pairs).
+  // B9a: the stable step of the springs that act now: the intact bonds, and `pairs` contact pairs
+  // that may touch whose levers' squares (r x n per principal axis, body frame) sum to `levers`.
   double acting_limit(std::size_t e, double pairs, const Vec3& levers) const;
   int level_for(double limit) const;  // the smallest k with dt0 / 2^k <= limit (at most max_level)
   void choose_steps();  // dt_ and, with stability levels, each element's level (B9, B10)
