@@ -173,8 +173,9 @@ class BlastScene final : public SteppedScene {
     // Issue 19: every balance.interval macro steps, the work now (levels, intact bonds, listed
     // pairs) over the owners; past the threshold, a new partition (FractureSolver::rebalance).
     if (balance_.due(solver_->steps(), decomp_->size())) {
-      const double before = solver_->imbalance_now();
-      if (balance_.over_threshold(before)) balance_.rebalanced(solver_->steps(), before, solver_->rebalance());
+      const FractureSolver::BalanceCheck check = solver_->balance_check();
+      if (balance_.over_threshold(check.imbalance))
+        balance_.rebalanced(solver_->steps(), check.imbalance, solver_->rebalance(check));
     }
     if (solver_->steps() % 1000 == 0) {
       // Blow-up check (positions are replicated: every rank decides alike).
@@ -538,7 +539,8 @@ void BlastScene::summarise(nlohmann::json& s) {
   s["contact_list_builds"] = solver_->list_builds();
   s["contact_list_refreshes"] = solver_->list_refreshes();
   s["contact_seconds_per_rank"] = contact_time;
-  // The partition (issue 19): the planned work per rank at the start and its imbalance, the bonds cut.
+  // The partition (issue 19): the planned work per rank on the last partition (the start's unless
+  // the run rebalanced) and its imbalance, the bonds cut.
   const std::vector<double> planned = solver_->planned_work();
   nlohmann::json measured;
   const char* names[3] = {"element_steps", "bond_evaluations", "contact_evaluations"};

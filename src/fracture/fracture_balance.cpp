@@ -44,20 +44,24 @@ ElementWork FractureSolver::work_now(const ContactListState& list) const {
   return element_work(block_, levels ? level_ : std::vector<int>(block_.size(), 0), broken_, contacts);
 }
 
-double FractureSolver::imbalance_now() const {
-  const ElementWork w = work_now(contact_list_state());
-  return substep_imbalance(part_level_work(block_, w, owner_, decomp_.size()));
+FractureSolver::BalanceCheck FractureSolver::balance_check() const {
+  BalanceCheck c;
+  c.list = contact_list_state();
+  c.work = work_now(c.list);
+  c.imbalance = substep_imbalance(part_level_work(block_, c.work, owner_, decomp_.size()));
+  return c;
 }
 
-double FractureSolver::rebalance() {
+double FractureSolver::rebalance(const BalanceCheck& check) {
   // As a restart would (checkpoint, then restore on the new owners): the owners' full state to
-  // every rank, the contact list by sphere keys, the dashpots' frozen orientations; then the
-  // partition of the work now, and the state restored on it. restore keeps the bits of an
+  // every rank, the contact list by sphere keys (the check's: the list state reads the list's own
+  // build poses and pairs, which sync_state leaves alone), the dashpots' frozen orientations; then
+  // the partition of the check's work, and the state restored on it. restore keeps the bits of an
   // uninterrupted run (BlastRestart), and no result depends on the owners.
   sync_state();
-  const ContactListState list = contact_list_state();
+  const ContactListState& list = check.list;
   const std::vector<Quaternion> frozen = damping_frozen();
-  work_ = work_now(list);
+  work_ = check.work;
   assign_owners();
   const std::vector<Vec3> x = x_, v = v_, L = L_, F = F_, T = T_;
   const std::vector<Quaternion> q = q_;

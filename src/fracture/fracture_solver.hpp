@@ -143,8 +143,9 @@ class FractureSolver {
   const std::vector<Vec3>& w() const { return w_; }
   const std::vector<Quaternion>& q() const { return q_; }
   const std::vector<int>& owner() const { return owner_; }
-  // The work a macro step gives each rank at the start (element_partition.hpp: updates and bond
-  // evaluations at the initial levels, a cut bond on both of its ranks), and the bonds cut.
+  // The work a macro step gives each rank on the partition in use (element_partition.hpp: updates
+  // and bond evaluations at the levels it was made from, the start's unless the run rebalanced;
+  // a cut bond on both of its ranks), and the bonds cut.
   std::vector<double> planned_work() const { return part_work(block_, work_, owner_, decomp_.size()); }
   long cut_bond_count() const { return cut_bonds(block_, owner_); }
   // The same per sub-step kind: row f is the work when the levels f and finer are due.
@@ -152,12 +153,18 @@ class FractureSolver {
     return part_level_work(block_, work_, owner_, decomp_.size());
   }
   const ElementWork& work() const { return work_; }
-  // Collective, between macro steps (issue 19): the sub-steps' imbalance (substep_imbalance) of the
-  // work now (the last macro step's levels, the intact bonds, the listed contact pairs) on the
-  // owners now; and a new partition of that work, the state carried over as a restart carries it
-  // (the same bits as without), returning the new owners' imbalance.
-  double imbalance_now() const;
-  double rebalance();
+  // Collective, between macro steps (issue 19): the work now (the last macro step's levels, the
+  // intact bonds, the listed contact pairs, gathered once) and its sub-steps' imbalance
+  // (substep_imbalance) on the owners now; and a new partition of that check's work, the state
+  // carried over as a restart carries it (the same bits as without), returning the new owners'
+  // imbalance.
+  struct BalanceCheck {
+    ContactListState list;
+    ElementWork work;
+    double imbalance = 1.0;
+  };
+  BalanceCheck balance_check() const;
+  double rebalance(const BalanceCheck& check);
   bool owns(std::size_t e) const { return owner_[e] == decomp_.rank(); }
   // Collective: every rank takes the owners' full state of elements and bonds (before output).
   void sync_state();
