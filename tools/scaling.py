@@ -134,7 +134,11 @@ def run(a):
 def iterations(a):
     """The Poisson's CG iterations per flow step on each rank count (the multigrid's levels follow the
     ranks' blocks, so they change with P): a few flow steps on P ranks, oversubscribed where P exceeds
-    the cores (their times mean nothing; their counts do), into D/iterations.json."""
+    the cores (their times mean nothing; their counts do), into D/iterations.json. With --on-one each P
+    runs on one process with the multigrid's levels laid out as on P ranks (the balance's grid and cuts,
+    `fluid.poisson.multigrid.levels_as_on`): the V-cycle's arithmetic is P ranks', so are the counts
+    (test CellMultigrid.LevelsLaidOutAsOnAnotherGridTakeItsIterations), for any P in one process's
+    memory."""
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                OMPI_MCA_rmaps_base_oversubscribe="1")
     path = os.path.join(a.out, "iterations.json")
@@ -145,15 +149,23 @@ def iterations(a):
         missing = [p for p in a.ranks if p > 1 and p not in balanced]
         if missing:
             sys.exit(f"scaling iterations: {a.cuts_from} has no cuts for {missing} ranks")
+    elif a.on_one:
+        sys.exit("scaling iterations: --on-one takes each P's grid and cuts from --cuts-from")
     for p in sorted(set([1] + a.ranks)):
         out = os.path.join(a.out, f"iterations_P{p}")
         sets = a.set + [f"run.max_steps={a.steps}", "output.checkpoint_interval=0"]
+        procs = p
         if p > 1 and balanced:
             row = balanced[p]
-            sets += ["domain.process_grid=[%d,%d,%d]" % tuple(row["grid"]),
-                     "domain.cuts={" + ", ".join(f"{'xyz'[d]}: [{', '.join(repr(c) for c in row['cuts'][d])}]"
-                                                 for d in range(3) if row["cuts"][d]) + "}"]
-        cmd = ["mpirun", "-n", str(p), "--bind-to", "none", TESSERA] + tessera_args(a.case, sets, out)
+            grid = "[%d,%d,%d]" % tuple(row["grid"])
+            cuts = "{" + ", ".join(f"{'xyz'[d]}: [{', '.join(repr(c) for c in row['cuts'][d])}]"
+                                   for d in range(3) if row["cuts"][d]) + "}"
+            if a.on_one:
+                procs = 1
+                sets += [f"fluid.poisson.multigrid.levels_as_on={{process_grid: {grid}, cuts: {cuts}}}"]
+            else:
+                sets += ["domain.process_grid=" + grid, "domain.cuts=" + cuts]
+        cmd = ["mpirun", "-n", str(procs), "--bind-to", "none", TESSERA] + tessera_args(a.case, sets, out)
         print(" ".join(shlex.quote(c) for c in cmd), flush=True)
         subprocess.run(cmd, check=True, env=env, stdout=subprocess.DEVNULL)
         s = json.load(open(os.path.join(out, "summary.json")))
@@ -165,11 +177,19 @@ def iterations(a):
                          "two_layer_levels": s["poisson"].get("two_layer_levels", 0),
                          "exchanges_per_cycle": s["poisson"].get("exchanges_per_cycle", 0),
                          "process_grid": s.get("process_grid"), "steps": s["steps"]}
-        print(f"{p} ranks {s.get('process_grid')}: {table[str(p)]['iterations_per_step']:.2f} iterations a step, "
-              f"{table[str(p)]['levels']} levels ({table[str(p)]['gathered_levels']} gathered onto fewer ranks, "
-              f"{table[str(p)]['two_layer_levels']} with two ghost layers; "
-              f"{table[str(p)]['exchanges_per_cycle']:.1f} exchanges a cycle), "
-              f"the coarsest {table[str(p)]['coarsest_cells']} cells", flush=True)
+        if procs != p:  # one process: the levels are P ranks', their halos and gathers are not run
+            table[str(p)].update({"process_grid": balanced[p]["grid"], "on_one_process": True,
+                                  "gathered_levels": None, "two_layer_levels": None, "exchanges_per_cycle": None})
+        row = table[str(p)]
+        if procs != p:
+            print(f"{p} ranks {row['process_grid']} laid out on one process: {row['iterations_per_step']:.2f} "
+                  f"iterations a step, {row['levels']} levels, the coarsest {row['coarsest_cells']} cells", flush=True)
+        else:
+            print(f"{p} ranks {s.get('process_grid')}: {row['iterations_per_step']:.2f} iterations a step, "
+                  f"{row['levels']} levels ({row['gathered_levels']} gathered onto fewer ranks, "
+                  f"{row['two_layer_levels']} with two ghost layers; "
+                  f"{row['exchanges_per_cycle']:.1f} exchanges a cycle), "
+                  f"the coarsest {row['coarsest_cells']} cells", flush=True)
     os.makedirs(a.out, exist_ok=True)
     with open(path, "w") as f:
         json.dump(table, f, indent=1)
@@ -730,7 +750,7 @@ def coupled_model(a, b, runs, net):
                     gather = math.ceil(math.log2(p)) * net["latency_s"] + 8.0 * count["coarsest_cells"] / net["bandwidth_bytes_per_s"]
                     reductions += (iters * ratio + 1) * gather
                 if count:
-                    reductions += iters * ratio * 2 * count.get("gathered_levels", 0) * lat
+                    reductions += iters * ratio * 2 * (count.get("gathered_levels") or 0) * lat
             swaps = sum(2 * message_time(net, 72.0 * max(load["recv"][r][2 * d + s] for r in range(p) for s in range(2)), line)
                         for d in face)
             dem = L * (math.ceil(math.log2(p)) * red + swaps) + 6 * swaps
@@ -765,6 +785,8 @@ def main():
     p.add_argument("case")
     p.add_argument("--ranks", type=lambda s: [int(x) for x in s.split(",")], required=True)
     p.add_argument("--steps", type=int, default=3)
+    p.add_argument("--on-one", action="store_true",
+                   help="count each P on one process, its multigrid's levels laid out as on P ranks (needs --cuts-from)")
     p.add_argument("--cuts-from", help="a `tessera balance` JSON (the model's D/balance.json): each P runs on "
                    "its balanced cuts and grid, as the model with --cuts balanced takes them")
     p.add_argument("--set", action="append", default=[])

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 
+#include "core/balance.hpp"
 #include "core/errors.hpp"
 #include "fluid/cell_multigrid_detail.hpp"
 #include "fluid/multigrid_plan.hpp"
@@ -50,9 +51,40 @@ struct Box {
   std::size_t size() const { return std::size_t(m[0]) * m[1] * m[2]; }
 };
 
+std::array<std::vector<int>, 3> blocks_as_on(const FluidGrid& grid, const LevelsAsOn& as) {
+  const std::string key = "fluid.poisson.multigrid.levels_as_on";
+  if (grid.size() > 1)
+    throw InputError(key, "", "a run on one process (it lays out another process grid's levels there; here " +
+                                  std::to_string(grid.size()) + " ranks)");
+  std::array<std::vector<int>, 3> blocks;
+  for (int d = 0; d < 3; ++d) {
+    const int p = as.grid[d], n = grid.cells()[d];
+    const double lo = grid.lo()[d], h = grid.h(d), hi = lo + n * h;
+    std::vector<double> cuts = as.cuts[d];
+    if (cuts.empty() && p > 1) {  // a flow run's default (scene_flow.cpp)
+      cuts = cell_block_cuts(lo, hi, n, p);
+      if (int(cuts.size()) != p - 1) {
+        cuts.clear();
+        for (int c = 1; c < p; ++c) cuts.push_back(lo + (hi - lo) * c / p);
+      }
+    }
+    const std::string along = key + ".cuts." + std::string(1, "xyz"[d]);
+    if (int(cuts.size()) != p - 1)
+      throw InputError(along, std::to_string(cuts.size()) + " planes", std::to_string(p - 1) + " interior planes (process_grid)");
+    for (std::size_t c = 0; c < cuts.size(); ++c)
+      if (!(cuts[c] > lo && cuts[c] < hi) || (c > 0 && !(cuts[c] > cuts[c - 1])))
+        throw InputError(along, std::to_string(cuts[c]), "increasing planes inside the box");
+    blocks[d] = cells_per_slab(cuts, n, lo, h);
+    for (int c : blocks[d])
+      if (c < 1) throw InputError(along, "", "planes that leave every block at least one cell");
+  }
+  return blocks;
+}
+
 }  // namespace
 
-CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coarse, bool coarse_direct, int ghost_layers)
+CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coarse, bool coarse_direct, int ghost_layers,
+                             const LevelsAsOn& as_on)
     : grid_(grid), pre_(pre), post_(post), coarse_(coarse), ghost_layers_(ghost_layers), coarse_direct_(coarse_direct) {
   DM fine = grid.pressure_dm();
   PetscInt M, N, P, pm, pn, pp;
@@ -64,7 +96,18 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
   std::array<int, 3> procs{int(pm), int(pn), int(pp)};
   std::array<std::vector<int>, 3> blocks;
   for (int d = 0; d < 3; ++d) blocks[d].assign(own0[d], own0[d] + procs[d]);
-  plan_ = plan_multigrid(blocks, {grid.periodic(0), grid.periodic(1), grid.periodic(2)}, ghost_layers_);
+  const std::array<bool, 3> periodic{grid.periodic(0), grid.periodic(1), grid.periodic(2)};
+  if (as_on.any()) {
+    plan_ = plan_multigrid(blocks_as_on(grid, as_on), periodic, ghost_layers_);
+    for (MultigridLevelPlan& L : plan_) {  // held whole by this one process
+      for (int d = 0; d < 3; ++d) L.blocks[d] = {L.n[d]}, L.parts[d].clear();
+      L.merged = {};
+      L.halo = periodic[0] || periodic[1] || periodic[2];
+      L.layers = 1;  // the same numbers with either (the passes' ghosts on periodic sides only)
+    }
+  } else {
+    plan_ = plan_multigrid(blocks, periodic, ghost_layers_);
+  }
   const auto& plan = plan_;
   // The ranks of the level being made, known on every rank: the rank (on transfer_comm_) of each
   // block (x fastest), and this rank's place.

@@ -48,6 +48,19 @@
 
 namespace tessera {
 
+// The levels another process grid would make, laid out on one process (issue 19): its blocks along
+// each direction from `cuts` (interior planes; where empty, a flow run's default: cell_block_cuts, else
+// equal slabs), planned as on those ranks (aggregates, triples, gathers), then held whole by the one
+// process. The V-cycle's numbers depend only on the aggregates (red-black passes by global parity,
+// restriction and prolongation within aggregates, the coarsest level by LU in natural order), so the
+// iterations are those ranks' (test CellMultigrid.LevelsLaidOutAsOnAnotherGridTakeItsIterations).
+// grid {0, 0, 0}: the run's own blocks.
+struct LevelsAsOn {
+  std::array<int, 3> grid{0, 0, 0};
+  std::array<std::vector<double>, 3> cuts;
+  bool any() const { return grid[0] > 0; }
+};
+
 class CellMultigrid {
  public:
   // coarse_direct: the coarsest level solved exactly (LU, every rank a copy); else coarse_sweeps.
@@ -56,7 +69,7 @@ class CellMultigrid {
   // and an exchange per pass); 1 everywhere exchanges before every pass. The same numbers either
   // way.
   CellMultigrid(const FluidGrid& grid, int pre_sweeps = 2, int post_sweeps = 2, int coarse_sweeps = 20,
-                bool coarse_direct = true, int ghost_layers = 2);
+                bool coarse_direct = true, int ghost_layers = 2, const LevelsAsOn& as_on = {});
   ~CellMultigrid();
   CellMultigrid(const CellMultigrid&) = delete;
   CellMultigrid& operator=(const CellMultigrid&) = delete;

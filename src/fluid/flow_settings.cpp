@@ -73,6 +73,14 @@ PoissonSettings FlowSettings::poisson_from_config(const ConfigNode& fluid) {
       s.coarse_direct = mg->choice("coarse_solver", {"direct", "sweeps"}, "direct") == "direct";
       if (s.pre_sweeps != s.post_sweeps)
         mg->fail("post_sweeps", "equal to pre_sweeps (CG needs a symmetric preconditioner)");
+      if (const auto as = mg->optional_section("levels_as_on")) {
+        const auto g = as->integers("process_grid", 3, 1, 1 << 20);
+        s.levels_as_on.grid = {int(g[0]), int(g[1]), int(g[2])};
+        if (const auto cuts = as->optional_section("cuts"))
+          for (int d = 0; d < 3; ++d)
+            if (cuts->has(std::string(1, "xyz"[d])))
+              s.levels_as_on.cuts[d] = cuts->reals(std::string(1, "xyz"[d]), Dim::length);
+      }
     }
   }
   return s;

@@ -11,20 +11,23 @@ namespace {
 
 constexpr auto check = petsc_check;
 
-// Cells per process along d: a rank owns the cells whose centres lie in its slab [cut_r, cut_r+1).
+// Cells per process along d (cells_per_slab on the decomposition's cut planes).
 std::vector<PetscInt> ownership(const Decomposition& decomp, int d, int n, double lo, double h) {
   const auto& cuts = decomp.cuts(d);
-  const int p = decomp.dims()[d];
-  std::vector<PetscInt> counts(p, 0);
-  for (int i = 0; i < n; ++i) {
-    const double x = lo + (i + 0.5) * h;
-    int r = int(std::upper_bound(cuts.begin() + 1, cuts.end() - 1, x) - (cuts.begin() + 1));
-    counts[r]++;
-  }
-  return counts;
+  const std::vector<int> counts = cells_per_slab(std::vector<double>(cuts.begin() + 1, cuts.end() - 1), n, lo, h);
+  return std::vector<PetscInt>(counts.begin(), counts.end());
 }
 
 }  // namespace
+
+std::vector<int> cells_per_slab(const std::vector<double>& interior, int n, double lo, double h) {
+  std::vector<int> counts(interior.size() + 1, 0);
+  for (int i = 0; i < n; ++i) {
+    const double x = lo + (i + 0.5) * h;
+    counts[std::size_t(std::upper_bound(interior.begin(), interior.end(), x) - interior.begin())]++;
+  }
+  return counts;
+}
 
 const char* boundary_name(BoundaryKind k) {
   switch (k) {

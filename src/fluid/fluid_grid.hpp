@@ -32,6 +32,11 @@ namespace tessera {
 enum class BoundaryKind { no_slip, free_slip, outflow, periodic };
 const char* boundary_name(BoundaryKind k);
 
+// The cells of each slab along one direction of n cells from lo, spacing h: a slab owns the cells
+// whose centres lie in it; `interior` the cut planes between the slabs (a rank's ownership range,
+// and the multigrid's blocks of another rank count laid out on one process).
+std::vector<int> cells_per_slab(const std::vector<double>& interior, int n, double lo, double h);
+
 class FluidGrid {
  public:
   static constexpr int kGhost = 2;
@@ -49,6 +54,7 @@ class FluidGrid {
 
   MPI_Comm comm() const { return comm_; }
   int rank() const { return rank_; }
+  int size() const { return size_; }
   DM field_dm() const { return da_; }
   DM pressure_dm() const { return dap_; }  // star stencil, width 1, same ownership (matrix layout)
 

@@ -24,7 +24,7 @@ PressurePoisson::PressurePoisson(const FluidGrid& grid, const PoissonSettings& s
     // Matrix-free: the multigrid's finest level applies the operator from its face coefficients.
     multigrid_ =
         std::make_unique<CellMultigrid>(grid, settings_.pre_sweeps, settings_.post_sweeps, settings_.coarse_sweeps,
-                                        settings_.coarse_direct);
+                                        settings_.coarse_direct, 2, settings_.levels_as_on);
     PetscInt local, global;
     Vec probe;
     check(DMCreateGlobalVector(dm, &probe), "DMCreateGlobalVector");
@@ -103,7 +103,11 @@ std::string PressurePoisson::description() const {
   if (std::string(pt) == "hypre") s += " (BoomerAMG)";
   if (std::string(pt) == "shell" && multigrid_)
     s = std::string(kt) + " + geometric multigrid (" + std::to_string(multigrid_->levels()) + " levels, the coarsest " +
-        std::to_string(multigrid_->coarsest_cells()) + " cells by " + (settings_.coarse_direct ? "LU)" : "sweeps)");
+        std::to_string(multigrid_->coarsest_cells()) + " cells by " + (settings_.coarse_direct ? "LU" : "sweeps") +
+        (settings_.levels_as_on.any() ? ", laid out as on " + std::to_string(settings_.levels_as_on.grid[0]) + "x" +
+                                            std::to_string(settings_.levels_as_on.grid[1]) + "x" +
+                                            std::to_string(settings_.levels_as_on.grid[2]) + " ranks)"
+                                      : ")");
   return s;
 }
 

@@ -35,6 +35,9 @@ struct PoissonSettings {
   bool geometric_multigrid = true;  // false: a PETSc preconditioner (options decide which)
   int pre_sweeps = 2, post_sweeps = 2, coarse_sweeps = 20;  // the V-cycle's smoothing
   bool coarse_direct = true;  // the coarsest level solved by LU (else coarse_sweeps; theory F9a)
+  // `multigrid.levels_as_on` (issue 19): on one process, the levels another process grid would make
+  // (cell_multigrid.hpp), so that one process counts that rank count's iterations.
+  LevelsAsOn levels_as_on;
   // CG's two inner products an iteration merged into one reduction (Chronopoulos & Gear; PETSc's
   // KSPCGUseSingleReduction): 2 reductions an iteration with the residual's norm, instead of 3.
   // Off by default: 5 % slower on 2 ranks, and the reductions are not where many ranks wait (F9).

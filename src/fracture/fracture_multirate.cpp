@@ -145,6 +145,7 @@ void FractureSolver::assign_levels() {
     for (std::size_t e = 0; e < n; ++e) speed[e] = norm(v_[e]) + norm(w_[e]) * reach_[e];
     std::vector<Vec3>& levers = scratch_levers_;
     levers.assign(n, Vec3{});
+    const int rank = decomp_.rank();
     for (const ListedPair& lp : pairs_) {
       const std::size_t a = static_cast<std::size_t>(lp.ea), b = static_cast<std::size_t>(lp.eb);
       const Vec3 pa = sphere_position(static_cast<std::size_t>(lp.first)), pb = sphere_position(static_cast<std::size_t>(lp.second));
@@ -154,8 +155,10 @@ void FractureSolver::assign_levels() {
       if (gap > 2 * dt_ * (speed[a] + speed[b])) continue;
       pairs[a] += 1, pairs[b] += 1;
       // Each side's lever (r x n) in its body frame, squared per principal axis; coincident
-      // centres (no direction): the farthest vertex's reach about every axis, a bound.
+      // centres (no direction): the farthest vertex's reach about every axis, a bound. Only the
+      // owned sides' (a pair across a cut is listed on both owners; the level is the owner's).
       for (const auto& [e, p] : {std::pair{a, pa}, std::pair{b, pb}}) {
+        if (owner_[e] != rank) continue;
         if (dist == 0) {
           const double r2 = reach_[e] * reach_[e];
           levers[e] += Vec3{r2, r2, r2};
@@ -168,7 +171,7 @@ void FractureSolver::assign_levels() {
     // Never finer than B9's bound (every face bonded and pressed by all its spheres), which the
     // explicit scheme's levels take: a count of pairs that may touch can exceed it.
     // Each rank its own elements (the others' stay 0: the owner's level is the largest).
-    for (int e : owned_by_rank_[static_cast<std::size_t>(decomp_.rank())]) {
+    for (int e : owned_by_rank_[static_cast<std::size_t>(rank)]) {
       const std::size_t i = static_cast<std::size_t>(e);
       level_[i] = level_for(settings_.stability_factor * std::max(acting_limit(i, pairs[i], levers[i]), b9_limit_[i]));
     }

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "core/decomposition.hpp"
+#include "core/errors.hpp"
 #include "fluid/cell_multigrid.hpp"
 #include "fluid/fluid_grid.hpp"
 #include "fluid/multigrid_plan.hpp"
@@ -104,10 +105,11 @@ TEST(CellMultigrid, OddSizesCoarsenAndTheVCycleIsSymmetricPositive) {
 // it: each rank writes its own cells, the rest are 0, summed (adding zeros is exact).
 std::vector<double> vcycle_of_source(std::array<int, 3> n, MPI_Comm comm, BoundaryKind x_sides,
                                      std::array<int, 3> procs = {0, 0, 0}, int* levels = nullptr,
-                                     int* gathered = nullptr, int ghost_layers = 2, long* messages = nullptr) {
+                                     int* gathered = nullptr, int ghost_layers = 2, long* messages = nullptr,
+                                     const LevelsAsOn& as_on = {}) {
   Problem P(n, comm, x_sides, procs);
   const FluidGrid& g = P.grid;
-  CellMultigrid mg(g, 2, 2, 20, true, ghost_layers);
+  CellMultigrid mg(g, 2, 2, 20, true, ghost_layers, as_on);
   if (levels) *levels = mg.levels();
   if (gathered) *gathered = mg.gathered_levels();
   mg.set_coefficients(P.rho);
@@ -224,6 +226,85 @@ TEST(CellMultigrid, SmallBlocksAreGatheredOntoFewerRanksAndKeepOneRanksLevels) {
     EXPECT_EQ(differ, 0u) << size << " ranks against 1, x " << boundary_name(x_sides) << ": first at cell " << first
                           << ", " << ranks[first] << " against " << one[first];
   }
+}
+
+// CG's iterations to 1e-10 on `comm` (the heavy drop and pool of Problem).
+int iterations_on(std::array<int, 3> n, MPI_Comm comm, BoundaryKind x_sides, std::array<int, 3> procs,
+                  const LevelsAsOn& as_on = {}) {
+  Problem P(n, comm, x_sides, procs);
+  const FluidGrid& g = P.grid;
+  PoissonSettings st;
+  st.rtol = 1e-10;
+  st.levels_as_on = as_on;
+  PressurePoisson poisson(g, st);
+  poisson.assemble(P.rho);
+  std::vector<double> b(g.local_size(), 0.0), p(g.local_size(), 0.0);
+  for (int k = g.begin(2); k < g.end(2); ++k)
+    for (int j = g.begin(1); j < g.end(1); ++j)
+      for (int i = g.begin(0); i < g.end(0); ++i) b[g.at(i, j, k)] = P.source(i, j, k);
+  return poisson.solve(b, p).iterations;
+}
+
+// The levels of P ranks laid out on one process (`fluid.poisson.multigrid.levels_as_on`, issue 19:
+// the scaling model counts the iterations of rank counts that do not fit here): the V-cycle is P
+// ranks' to the bit and CG takes P ranks' iterations, where one process's own levels differ (odd
+// blocks end in single cells or triples, small blocks are gathered). The ranks of this test along
+// x, then along y (equal slabs, as the test's decomposition cuts them), walls and x periodic. Also refused: on more than one process, and cuts that do not match the grid.
+TEST(CellMultigrid, LevelsLaidOutAsOnAnotherGridTakeItsIterations) {
+  int rank, size;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  if (size > 1) {
+    LevelsAsOn on_two;
+    on_two.grid = {2, 1, 1};
+    EXPECT_THROW(iterations_on({45, 45, 33}, MPI_COMM_WORLD, BoundaryKind::no_slip, {0, 0, 0}, on_two), InputError);
+  }
+  if (rank == 0) {
+    LevelsAsOn bad;
+    bad.grid = {3, 1, 1};
+    bad.cuts[0] = {0.5};  // 2 planes needed
+    EXPECT_THROW(iterations_on({45, 45, 33}, MPI_COMM_SELF, BoundaryKind::no_slip, {1, 1, 1}, bad), InputError);
+    bad.cuts[0] = {0.6, 0.3};  // not increasing
+    EXPECT_THROW(iterations_on({45, 45, 33}, MPI_COMM_SELF, BoundaryKind::no_slip, {1, 1, 1}, bad), InputError);
+  }
+  if (size == 1) return;  // P ranks are this test's own
+  struct Split {
+    std::array<int, 3> n, procs;
+  };
+  for (const Split& split : {Split{{45, 45, 33}, {size, 1, 1}}, Split{{24, 46, 40}, {1, size, 1}}})
+    for (const BoundaryKind x_sides : {BoundaryKind::no_slip, BoundaryKind::periodic}) {
+      if (x_sides == BoundaryKind::periodic && split.n[0] % 2) continue;  // red-black needs an even periodic size
+      LevelsAsOn as_on;  // the cut planes of Problem's decomposition: equal slabs of the box
+      as_on.grid = split.procs;
+      const double box[3] = {kL, kL, 0.75 * kL};
+      for (int d = 0; d < 3; ++d)
+        for (int c = 1; c < split.procs[d]; ++c) as_on.cuts[d].push_back(box[d] * c / split.procs[d]);
+      int levels = 0, gathered = 0, as_levels = 0;
+      const std::vector<double> ranks = vcycle_of_source(split.n, MPI_COMM_WORLD, x_sides, split.procs, &levels, &gathered);
+      const int ranks_iterations = iterations_on(split.n, MPI_COMM_WORLD, x_sides, split.procs);
+      if (rank != 0) continue;
+      const std::vector<double> as = vcycle_of_source(split.n, MPI_COMM_SELF, x_sides, {1, 1, 1}, &as_levels, nullptr,
+                                                      2, nullptr, as_on);
+      const std::vector<double> own = vcycle_of_source(split.n, MPI_COMM_SELF, x_sides, {1, 1, 1});
+      const int as_iterations = iterations_on(split.n, MPI_COMM_SELF, x_sides, {1, 1, 1}, as_on);
+      const int own_iterations = iterations_on(split.n, MPI_COMM_SELF, x_sides, {1, 1, 1});
+      std::size_t differ = 0, first = 0, own_differ = 0;
+      for (std::size_t c = 0; c < ranks.size(); ++c) {
+        if (ranks[c] != as[c] && differ++ == 0) first = c;
+        own_differ += ranks[c] != own[c] ? 1 : 0;
+      }
+      const std::string what = std::to_string(split.n[0]) + " x " + std::to_string(split.n[1]) + " x " +
+                               std::to_string(split.n[2]) + " on " + std::to_string(size) + " ranks, x " +
+                               boundary_name(x_sides);
+      std::printf("%s: %d levels (%d gathered), CG iterations %d on the ranks, %d laid out as on them, %d one rank's own\n",
+                  what.c_str(), levels, gathered, ranks_iterations, as_iterations, own_iterations);
+      double worst = 0, scale = 0;
+      for (std::size_t c = 0; c < ranks.size(); ++c) worst = std::max(worst, std::abs(ranks[c] - as[c])), scale = std::max(scale, std::abs(ranks[c]));
+      EXPECT_EQ(differ, 0u) << what << ": first at cell " << first << ", " << as[first] << " against " << ranks[first] << " worst " << worst / scale;
+      EXPECT_EQ(as_levels, levels) << what;
+      EXPECT_EQ(as_iterations, ranks_iterations) << what;
+      EXPECT_GT(own_differ, 0u) << what << ": one rank's own levels are the ranks' here; the test shows nothing";
+    }
 }
 
 // The plan (fluid/multigrid_plan.hpp) lays out the levels of P ranks from the finest level's cuts
