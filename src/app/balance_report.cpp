@@ -27,16 +27,30 @@ namespace tessera {
 namespace {
 
 // The blast's elements (issue 19): each partition's work per rank at the start, from the levels a
-// run would choose (element_partition.hpp), on one process.
+// run would choose (element_partition.hpp), on one process; with a checkpoint (--bodies), also the
+// work of its state (the levels a macro step would take there, the intact bonds, the listed contact
+// pairs) on each partition of the start's work (a run that never rebalances) and on a partition of
+// that work itself (a rebalanced run).
 int blast_balance_report(const BalanceRequest& rq, const ConfigNode& root) {
   const BlastCase c = read_blast_case(root, std::filesystem::path(rq.case_file).parent_path().string());
   const Decomposition one(MPI_COMM_SELF, c.lo, c.hi, {1, 1, 1});
-  const FractureSolver solver(one, build_bonded_block(c.mesh, c.settings.density), c.settings, c.hole);
+  FractureSolver solver(one, build_bonded_block(c.mesh, c.settings.density), c.settings, c.hole);
+  const ElementWork start = solver.work();
+  ElementWork now;
+  if (!rq.bodies_file.empty()) {
+    read_blast_checkpoint(rq.bodies_file, MPI_COMM_SELF, solver);
+    solver.setup(false);
+    solver.take_levels();
+    const FractureSolver::BalanceCheck check = solver.balance_check();
+    now = check.work;
+    std::printf("checkpoint %s: t = %.4g s, step %ld, %zu listed contact pairs\n", rq.bodies_file.c_str(), solver.time(),
+                solver.steps(), check.list.pairs.size());
+  }
   const BondedBlock& block = solver.block();
   std::printf("%zu elements, %zu bonds; work per macro step at the initial levels: %.0f element updates, %.0f bond "
               "evaluations x %.1f\n",
-              block.size(), block.bonds.size(), [&] { double w = 0; for (double x : solver.work().element) w += x; return w; }(),
-              [&] { double w = 0; for (double x : solver.work().bond) w += x; return w / kBondCostPerUpdate; }(),
+              block.size(), block.bonds.size(), [&] { double w = 0; for (double x : start.element) w += x; return w; }(),
+              [&] { double w = 0; for (double x : start.bond) w += x; return w / kBondCostPerUpdate; }(),
               kBondCostPerUpdate);
   // Per partition: the macro step's imbalance (sum), the sub-steps' (every sub-step ends in an
   // exchange that waits for the busiest rank: substep_imbalance, element_partition.hpp), bonds cut.
@@ -50,12 +64,19 @@ int blast_balance_report(const BalanceRequest& rq, const ConfigNode& root) {
     nlohmann::json row{{"ranks", p}, {"grid", dims}};
     std::printf("%6d %4dx%dx%-3d", p, dims[0], dims[1], dims[2]);
     for (const Partition how : {Partition::slabs, Partition::balanced, Partition::metis}) {
-      const std::vector<int> part = partition_elements(block, solver.work(), how, c.lo, c.hi, dims);
-      const std::vector<double> work = part_work(block, solver.work(), part, p);
-      const auto level_work = part_level_work(block, solver.work(), part, p);
+      const std::vector<int> part = partition_elements(block, start, how, c.lo, c.hi, dims);
+      const std::vector<double> work = part_work(block, start, part, p);
+      const auto level_work = part_level_work(block, start, part, p);
       const double substeps = substep_imbalance(level_work);
       const long cut = cut_bonds(block, part);
-      const LevelHalo halo = part_level_halo(block, solver.work(), part, p);
+      const LevelHalo halo = part_level_halo(block, start, part, p);
+      if (!now.element.empty()) {  // the checkpoint's work on the start's partition, and repartitioned
+        const std::vector<int> again = partition_elements(block, now, how, c.lo, c.hi, dims);
+        row["checkpoint"][partition_name(how)] = {
+            {"start_partition_substep_imbalance", substep_imbalance(part_level_work(block, now, part, p))},
+            {"repartitioned_substep_imbalance", substep_imbalance(part_level_work(block, now, again, p))},
+            {"repartitioned_cut_bonds", cut_bonds(block, again)}};
+      }
       std::printf(" %7.3f %7.3f %8ld", imbalance(work), substeps, cut);
       row[partition_name(how)] = {{"imbalance", imbalance(work)},
                                   {"substep_imbalance", substeps},
@@ -68,13 +89,27 @@ int blast_balance_report(const BalanceRequest& rq, const ConfigNode& root) {
                                   {"work_per_rank", work}};
     }
     std::printf("\n");
+    if (row.contains("checkpoint")) {
+      std::printf("%6s %10s", "", "at ckpt");
+      for (const Partition how : {Partition::slabs, Partition::balanced, Partition::metis}) {
+        const auto& r = row["checkpoint"][partition_name(how)];
+        std::printf(" %7s %7.3f %8s", "", r["start_partition_substep_imbalance"].get<double>(), "");
+      }
+      std::printf("\n%6s %10s", "", "repart.");
+      for (const Partition how : {Partition::slabs, Partition::balanced, Partition::metis}) {
+        const auto& r = row["checkpoint"][partition_name(how)];
+        std::printf(" %7s %7.3f %8ld", "", r["repartitioned_substep_imbalance"].get<double>(),
+                    r["repartitioned_cut_bonds"].get<long>());
+      }
+      std::printf("\n");
+    }
     table.push_back(row);
   }
   if (!rq.json_out.empty()) {
     std::ofstream out(rq.json_out);
     // Elements due at each kind of sub-step (levels f and finer): what the exchange after it moves.
-    std::vector<long> level_elements(static_cast<std::size_t>(work_levels(solver.work())), 0);
-    for (int k : solver.work().level)
+    std::vector<long> level_elements(static_cast<std::size_t>(work_levels(start)), 0);
+    for (int k : start.level)
       for (int f = 0; f <= k; ++f) ++level_elements[static_cast<std::size_t>(f)];
     out << nlohmann::json{{"case", rq.case_file},
                           {"elements", block.size()},

@@ -406,10 +406,18 @@ void BlastScene::write_checkpoint(const std::string& path) {
 }
 
 void BlastScene::read_checkpoint(const std::string& path) {
-  const H5File f = H5File::open_read(path, decomp_->comm());
+  const BlastCheckpoint c = read_blast_checkpoint(path, decomp_->comm(), *solver_);
+  probe_displacement_ = c.probe_displacement;
+  probed_ = c.probed;
+}
+
+}  // namespace
+
+BlastCheckpoint read_blast_checkpoint(const std::string& path, MPI_Comm comm, FractureSolver& solver) {
+  const H5File f = H5File::open_read(path, comm);
   int cols = 0;
   const std::vector<double> state = f.read_all<double>("elements", cols);
-  const BondedBlock& b = solver_->block();
+  const BondedBlock& b = solver.block();
   if (cols != 19 || state.size() != 19 * b.size())
     throw InputError("restart", path, "a checkpoint of this case's mesh (" + std::to_string(b.size()) + " elements)");
   const std::vector<double> bonds = f.read_all<double>("bonds", cols);
@@ -460,18 +468,19 @@ void BlastScene::read_checkpoint(const std::string& path) {
     list.born_overlaps = f.attribute_long("born_overlaps");
     list.deepest_born_overlap = f.attribute_double("deepest_born_overlap");
   }
-  solver_->restore(x, q, v, L, bs, broken, list, F, T);
+  solver.restore(x, q, v, L, bs, broken, list, F, T);
   if (f.has("damping_frozen")) {  // B9b (since 2026-12-07; before, the orientations themselves)
     const std::vector<double> fr = f.read_all<double>("damping_frozen", cols);
     if (cols != 4 || fr.size() != 4 * b.size()) throw InputError("restart", path, "4 numbers per element in damping_frozen");
     std::vector<Quaternion> frozen(b.size());
     for (std::size_t e = 0; e < b.size(); ++e) frozen[e] = {fr[4 * e], fr[4 * e + 1], fr[4 * e + 2], fr[4 * e + 3]};
-    solver_->set_damping_frozen(frozen);
+    solver.set_damping_frozen(frozen);
   }
-  solver_->set_clock(f.attribute_double("time"), f.attribute_long("steps"));
-  probe_displacement_ = f.attribute_double("probe_displacement");
-  probed_ = f.attribute_long("probed") != 0;
+  solver.set_clock(f.attribute_double("time"), f.attribute_long("steps"));
+  return {f.attribute_double("probe_displacement"), f.attribute_long("probed") != 0};
 }
+
+namespace {
 
 void BlastScene::summarise(nlohmann::json& s) {
   solver_->sync_state();

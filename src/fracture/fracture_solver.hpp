@@ -164,6 +164,9 @@ class FractureSolver {
     double imbalance = 1.0;
   };
   BalanceCheck balance_check() const;
+  // The levels a macro step would take from the state now (after restore and setup: `tessera
+  // balance` pricing a checkpoint's work).
+  void take_levels() { assign_levels(); }
   double rebalance(const BalanceCheck& check);
   bool owns(std::size_t e) const { return owner_[e] == decomp_.rank(); }
   // Collective: every rank takes the owners' full state of elements and bonds (before output).
