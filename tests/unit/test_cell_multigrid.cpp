@@ -228,21 +228,28 @@ TEST(CellMultigrid, SmallBlocksAreGatheredOntoFewerRanksAndKeepOneRanksLevels) {
   }
 }
 
-// CG's iterations to 1e-10 on `comm` (the heavy drop and pool of Problem).
-int iterations_on(std::array<int, 3> n, MPI_Comm comm, BoundaryKind x_sides, std::array<int, 3> procs,
-                  const LevelsAsOn& as_on = {}) {
-  Problem P(n, comm, x_sides, procs);
+// Solves A p = b (b: Problem's source) with the multigrid-preconditioned CG to `st`.
+PoissonStats solve_source(const Problem& P, const PoissonSettings& st, std::vector<double>& b, std::vector<double>& p) {
   const FluidGrid& g = P.grid;
-  PoissonSettings st;
-  st.rtol = 1e-10;
-  st.levels_as_on = as_on;
   PressurePoisson poisson(g, st);
   poisson.assemble(P.rho);
-  std::vector<double> b(g.local_size(), 0.0), p(g.local_size(), 0.0);
+  b.assign(g.local_size(), 0.0);
+  p.assign(g.local_size(), 0.0);
   for (int k = g.begin(2); k < g.end(2); ++k)
     for (int j = g.begin(1); j < g.end(1); ++j)
       for (int i = g.begin(0); i < g.end(0); ++i) b[g.at(i, j, k)] = P.source(i, j, k);
-  return poisson.solve(b, p).iterations;
+  return poisson.solve(b, p);
+}
+
+// CG's iterations to 1e-10 on `comm` (the heavy drop and pool of Problem).
+int iterations_on(std::array<int, 3> n, MPI_Comm comm, BoundaryKind x_sides, std::array<int, 3> procs,
+                  const LevelsAsOn& as_on = {}) {
+  const Problem P(n, comm, x_sides, procs);
+  PoissonSettings st;
+  st.rtol = 1e-10;
+  st.levels_as_on = as_on;
+  std::vector<double> b, p;
+  return solve_source(P, st, b, p).iterations;
 }
 
 // The levels of P ranks laid out on one process (`fluid.poisson.multigrid.levels_as_on`, issue 19:
@@ -373,19 +380,14 @@ TEST(CellMultigrid, ThePlanLaysOutItsLevelsAndCountsTheExchangesACycleMakes) {
 // Solves A p = b with the multigrid-preconditioned CG; returns the iterations and checks the
 // 7-point equations' residual here.
 int solve_and_check(std::array<int, 3> n, bool coarse_direct = true, bool single_reduction = false) {
-  Problem P(n);
+  const Problem P(n);
   const FluidGrid& g = P.grid;
   PoissonSettings st;
   st.rtol = 1e-10;
   st.coarse_direct = coarse_direct;
   st.single_reduction = single_reduction;
-  PressurePoisson poisson(g, st);
-  poisson.assemble(P.rho);
-  std::vector<double> b(g.local_size(), 0.0), p(g.local_size(), 0.0);
-  for (int k = g.begin(2); k < g.end(2); ++k)
-    for (int j = g.begin(1); j < g.end(1); ++j)
-      for (int i = g.begin(0); i < g.end(0); ++i) b[g.at(i, j, k)] = P.source(i, j, k);
-  const PoissonStats stats = poisson.solve(b, p);
+  std::vector<double> b, p;
+  const PoissonStats stats = solve_source(P, st, b, p);
   // The neighbours' pressures: a ghost exchange on the field layout.
   Vec global, local;
   DMCreateGlobalVector(g.field_dm(), &global);
