@@ -129,10 +129,8 @@ class FlowScene final : public SteppedScene {
     // (cell_block_cuts: no slab larger than equal slabs make it; fewer odd cells, fewer iterations).
     Decomposition::Cuts cuts = decomp_->interior_cuts();
     for (int d = 0; d < 3; ++d)
-      if (domain.cuts[d].empty() && decomp_->dims()[d] > 1) {
-        auto blocks = cell_block_cuts(domain.lo[d], domain.hi[d], settings.cells[d], decomp_->dims()[d]);
-        if (int(blocks.size()) == decomp_->dims()[d] - 1) cuts[d] = std::move(blocks);
-      }
+      if (domain.cuts[d].empty() && decomp_->dims()[d] > 1)
+        cuts[d] = flow_default_cuts(domain.lo[d], domain.hi[d], settings.cells[d], decomp_->dims()[d]);
     decomp_->set_cuts(cuts);
     flow_ = std::make_unique<FlowSolver>(*decomp_, settings);
     if (coupled) bodies_ = std::make_unique<SceneBodies>(root, case_dir, *decomp_, *flow_);

@@ -94,6 +94,14 @@ std::vector<double> cell_block_cuts(double lo, double hi, int cells, int parts) 
   return cuts;
 }
 
+std::vector<double> flow_default_cuts(double lo, double hi, int cells, int parts) {
+  std::vector<double> cuts = cell_block_cuts(lo, hi, cells, parts);
+  if (static_cast<int>(cuts.size()) == parts - 1) return cuts;
+  cuts.clear();
+  for (int i = 1; i < parts; ++i) cuts.push_back(lo + (hi - lo) * static_cast<double>(i) / parts);
+  return cuts;
+}
+
 int grid_cell(const Vec3& x, std::array<int, 3> dims, const CutPlanes& interior) {
   int r = 0, stride = 1;
   for (int d = 0; d < 3; ++d) {

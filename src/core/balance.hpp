@@ -40,6 +40,9 @@ CutPlanes equal_cuts(const Vec3& lo, const Vec3& hi, std::array<int, 3> dims);
 // rank's cells halves such blocks k times without an odd cell (on the paper drop's 176 cells, 5
 // slabs: 32, 36, 36, 36, 36 rather than 35, 35, 35, 35, 36; docs/performance.md).
 std::vector<double> cell_block_cuts(double lo, double hi, int cells, int parts);
+// A flow run's interior cut planes along one direction where the case sets none: cell_block_cuts,
+// else equal slabs (scene_flow.cpp; the multigrid's levels laid out as on another grid).
+std::vector<double> flow_default_cuts(double lo, double hi, int cells, int parts);
 
 // The grid cell (x fastest) that holds x for interior cuts; outside the box, the boundary slab.
 int grid_cell(const Vec3& x, std::array<int, 3> dims, const CutPlanes& interior);

@@ -61,13 +61,7 @@ std::array<std::vector<int>, 3> blocks_as_on(const FluidGrid& grid, const Levels
     const int p = as.grid[d], n = grid.cells()[d];
     const double lo = grid.lo()[d], h = grid.h(d), hi = lo + n * h;
     std::vector<double> cuts = as.cuts[d];
-    if (cuts.empty() && p > 1) {  // a flow run's default (scene_flow.cpp)
-      cuts = cell_block_cuts(lo, hi, n, p);
-      if (int(cuts.size()) != p - 1) {
-        cuts.clear();
-        for (int c = 1; c < p; ++c) cuts.push_back(lo + (hi - lo) * c / p);
-      }
-    }
+    if (cuts.empty() && p > 1) cuts = flow_default_cuts(lo, hi, n, p);  // a flow run's (scene_flow.cpp)
     const std::string along = key + ".cuts." + std::string(1, "xyz"[d]);
     if (int(cuts.size()) != p - 1)
       throw InputError(along, std::to_string(cuts.size()) + " planes", std::to_string(p - 1) + " interior planes (process_grid)");
