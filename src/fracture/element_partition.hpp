@@ -10,7 +10,8 @@
 //             rank, so each kind of sub-step is balanced, not only the macro step's sum). METIS also
 //             partitions for the sum alone, and the partition whose macro step is shorter by
 //             substep_time (below) is taken: with few elements per rank the constraints cannot all
-//             be met (the seed's 958 on 16 ranks).
+//             be met (the seed's 958 on 16 ranks). The partition taken is then refined by single
+//             moves of elements between bonded parts (refine_by_substeps).
 // The work is what a macro step of B10 does: element e is updated 2^k_e times, a bond evaluated
 // 2^max(k_i, k_j) times (one level for the uniform step). The owners change no result: an element
 // is integrated by its owner, which sums its forces in bond, contact, hole order (fracture_solver.hpp).
@@ -55,6 +56,14 @@ ElementWork element_work(const BondedBlock& block, const std::vector<int>& level
 // dims = {nx, ny, nz} over the box [lo, hi]; for metis the METIS part (parts = nx ny nz).
 std::vector<int> partition_elements(const BondedBlock& block, const ElementWork& work, Partition how, const Vec3& lo,
                                     const Vec3& hi, std::array<int, 3> dims);
+
+// Moves elements linked to another part out of a sub-step kind's busiest part into a part they are
+// linked to (a bond with work, or a listed pair), one at a time, the move that shortens the macro
+// step's time most (substep_time of part_level_work), or, where none does, that leaves it and most
+// lowers the sum over the kinds of the parts' squared work; until no move does either. No part is
+// left empty. METIS's partitions are refined so (partition_elements): its constraints cannot all be
+// met where a level holds a few elements a rank.
+void refine_by_substeps(const BondedBlock& block, const ElementWork& work, std::vector<int>& part, int parts);
 
 // Each part's work: its elements' updates and every bond with an element in it (a cut bond on both).
 std::vector<double> part_work(const BondedBlock& block, const ElementWork& work, const std::vector<int>& part,

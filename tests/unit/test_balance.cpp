@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <mpi.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/balance.hpp"
@@ -133,6 +134,68 @@ TEST(Balance, TheHaloSendsEachCrossingElementOncePerKindItIsDue) {
   EXPECT_EQ(h.sent[1], (std::vector<double>{1, 1}));
   EXPECT_EQ(h.sent[2], (std::vector<double>{1, 0}));
   EXPECT_EQ(h.neighbours, (std::vector<int>{1, 1}));
+}
+
+// A chain of elements 0-1-...-(n-1), bonded to their next, at the given levels.
+BondedBlock chain(std::size_t n) {
+  BondedBlock block;
+  block.mass.assign(n, 1.0);
+  block.x0.assign(n, Vec3{});
+  for (std::size_t e = 0; e + 1 < n; ++e) {
+    BondGeometry g;
+    g.master = int(e), g.slave = int(e + 1);
+    block.bonds.push_back(g);
+  }
+  return block;
+}
+
+// One level, six elements in a chain, five on part 0 and the last on part 1: part 0 does 5 updates
+// and 5 bonds (the cut one on both parts), 5 + 5 x 1.4 = 12, part 1 1 + 1.4 = 2.4. The refinement
+// moves element 4 (9.6 against 4.8), then element 3: three a part, 3 + 3 x 1.4 = 7.2 each, the
+// best two parts can do; then no move shortens the step.
+TEST(Balance, RefinementEvensAChainsParts) {
+  const BondedBlock block = chain(6);
+  const ElementWork work = element_work(block, std::vector<int>(6, 0));
+  std::vector<int> part = {0, 0, 0, 0, 0, 1};
+  EXPECT_NEAR(substep_time(part_level_work(block, work, part, 2)), 12.0, 1e-12);
+  refine_by_substeps(block, work, part, 2);
+  EXPECT_EQ(part, (std::vector<int>{0, 0, 0, 1, 1, 1}));
+  EXPECT_NEAR(substep_time(part_level_work(block, work, part, 2)), 7.2, 1e-12);
+}
+
+// Two levels: a chain of 8, the first four at level 1 (element 4 too, by its bond with 3), two parts,
+// six elements on part 0: rows 14.4 / 4.8 and 10.6 / 0, a step of 25.0. The refinement ends where
+// no move of an element to a part it is bonded to shortens the step (each tried here), 19.2, with
+// no part empty. It is a local search that keeps parts joined: the shortest step of all 254
+// partitions with both parts used is 18.2 ({0,0,0,1,1,0,1,1}, rows 11.0 / 11.0 and 7.2 / 4.8), with
+// element 5 an island in part 0, which it does not make.
+TEST(Balance, RefinementEndsWhereNoMoveShortensTheStep) {
+  const BondedBlock block = chain(8);
+  const ElementWork work = element_work(block, {1, 1, 1, 1, 0, 0, 0, 0});
+  auto step = [&](const std::vector<int>& p) { return substep_time(part_level_work(block, work, p, 2)); };
+  std::vector<int> part = {0, 0, 0, 0, 0, 0, 1, 1};
+  EXPECT_NEAR(step(part), 25.0, 1e-12);
+  refine_by_substeps(block, work, part, 2);
+  EXPECT_NEAR(step(part), 19.2, 1e-12);
+  const auto used = std::count(part.begin(), part.end(), 0);
+  EXPECT_TRUE(used > 0 && used < 8);
+  int tried = 0;
+  for (std::size_t e = 0; e < 8; ++e) {
+    const bool linked = (e > 0 && part[e - 1] != part[e]) || (e < 7 && part[e + 1] != part[e]);
+    if (!linked) continue;
+    std::vector<int> moved = part;
+    moved[e] = 1 - moved[e];
+    EXPECT_GE(step(moved), step(part) - 1e-12) << "moving element " << e;
+    ++tried;
+  }
+  EXPECT_GE(tried, 2);
+  double best = 1e300;
+  for (int mask = 1; mask < 255; ++mask) {
+    std::vector<int> p(8);
+    for (int e = 0; e < 8; ++e) p[std::size_t(e)] = (mask >> e) & 1;
+    best = std::min(best, step(p));
+  }
+  EXPECT_NEAR(best, 18.2, 1e-12);
 }
 
 }  // namespace
