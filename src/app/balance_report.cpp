@@ -72,10 +72,12 @@ int blast_balance_report(const BalanceRequest& rq, const ConfigNode& root) {
       const LevelHalo halo = part_level_halo(block, start, part, p);
       if (!now.element.empty()) {  // the checkpoint's work on the start's partition, and repartitioned
         const std::vector<int> again = partition_elements(block, now, how, c.lo, c.hi, dims);
-        row["checkpoint"][partition_name(how)] = {
-            {"start_partition_substep_imbalance", substep_imbalance(part_level_work(block, now, part, p))},
-            {"repartitioned_substep_imbalance", substep_imbalance(part_level_work(block, now, again, p))},
-            {"repartitioned_cut_bonds", cut_bonds(block, again)}};
+        const auto kept = part_level_work(block, now, part, p), moved = part_level_work(block, now, again, p);
+        row["checkpoint"][partition_name(how)] = {{"start_partition_substep_imbalance", substep_imbalance(kept)},
+                                                  {"repartitioned_substep_imbalance", substep_imbalance(moved)},
+                                                  {"repartitioned_cut_bonds", cut_bonds(block, again)},
+                                                  {"start_partition_level_work", kept},
+                                                  {"repartitioned_level_work", moved}};
       }
       std::printf(" %7.3f %7.3f %8ld", imbalance(work), substeps, cut);
       row[partition_name(how)] = {{"imbalance", imbalance(work)},

@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "fracture/element_partition.hpp"
 #include "support/run_command.hpp"
 
 namespace fs = std::filesystem;
@@ -90,6 +91,16 @@ TEST(BlastBalance, PricesACheckpointsWorkOnEachPartition) {
   const double again = four["checkpoint"]["metis"]["repartitioned_substep_imbalance"].get<double>();
   EXPECT_LT(again, kept) << r.output;
   EXPECT_LE(again, 1.05) << r.output;
+  // Each partition's per-rank work at the checkpoint (tools/plot_ranks.py --blast-balance draws it):
+  // a row per sub-step kind, a column per rank, whose busiest ranks give the imbalance above.
+  for (const std::string key : {"start_partition", "repartitioned"}) {
+    const auto work = four["checkpoint"]["metis"][key + "_level_work"].get<std::vector<std::vector<double>>>();
+    ASSERT_FALSE(work.empty()) << key;
+    for (const auto& row : work) EXPECT_EQ(row.size(), 4u) << key;
+    EXPECT_NEAR(tessera::substep_imbalance(work), four["checkpoint"]["metis"][key + "_substep_imbalance"].get<double>(),
+                1e-12)
+        << key;
+  }
 }
 
 class BlastScene : public ::testing::TestWithParam<std::string> {};
