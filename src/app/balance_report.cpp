@@ -273,7 +273,7 @@ int balance_report(const BalanceRequest& rq) {
       periodic[d] = boundaries[d][0] == BoundaryKind::periodic;
     }
     const auto& ps = poisson;
-    const auto plan = plan_multigrid(blocks, periodic, 2);
+    const auto plan = plan_multigrid(blocks, periodic, 2, ps.level_pairs);
     const auto exchanges = multigrid_exchanges(plan, ps.pre_sweeps, ps.post_sweeps, ps.coarse_sweeps, ps.coarse_direct);
     nlohmann::json levels = nlohmann::json::array();
     for (std::size_t l = 0; l < plan.size(); ++l) {

@@ -78,7 +78,7 @@ std::array<std::vector<int>, 3> blocks_as_on(const FluidGrid& grid, const Levels
 }  // namespace
 
 CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coarse, bool coarse_direct, int ghost_layers,
-                             const LevelsAsOn& as_on)
+                             const LevelsAsOn& as_on, bool level_pairs)
     : grid_(grid), pre_(pre), post_(post), coarse_(coarse), ghost_layers_(ghost_layers), coarse_direct_(coarse_direct) {
   DM fine = grid.pressure_dm();
   PetscInt M, N, P, pm, pn, pp;
@@ -92,15 +92,16 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
   for (int d = 0; d < 3; ++d) blocks[d].assign(own0[d], own0[d] + procs[d]);
   const std::array<bool, 3> periodic{grid.periodic(0), grid.periodic(1), grid.periodic(2)};
   if (as_on.any()) {
-    plan_ = plan_multigrid(blocks_as_on(grid, as_on), periodic, ghost_layers_);
+    plan_ = plan_multigrid(blocks_as_on(grid, as_on), periodic, ghost_layers_, level_pairs);
     for (MultigridLevelPlan& L : plan_) {  // held whole by this one process
       for (int d = 0; d < 3; ++d) L.blocks[d] = {L.n[d]}, L.parts[d].clear();
       L.merged = {};
+      L.crosses = {};
       L.halo = periodic[0] || periodic[1] || periodic[2];
       L.layers = 1;  // the same numbers with either (the passes' ghosts on periodic sides only)
     }
   } else {
-    plan_ = plan_multigrid(blocks, periodic, ghost_layers_);
+    plan_ = plan_multigrid(blocks, periodic, ghost_layers_, level_pairs);
   }
   const auto& plan = plan_;
   // The ranks of the level being made, known on every rank: the rank (on transfer_comm_) of each
@@ -172,6 +173,7 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
     L->procs = procs;
     L->coords = coords;
     L->gathered = plan_level.gathered();
+    L->crosses = plan_level.crossing();
     L->part = part;
     L->parts = parts;
     L->inbox.resize(parts.size());
@@ -195,6 +197,7 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
       block.m = L->m;
       block.gs = L->gs;
       block.gm = L->gm;
+      L->block = block;
       L->halo = std::make_unique<CellHalo>(comm, block, w, w == 1 ? CellHalo::Stencil::star : CellHalo::Stencil::box);
       if (w == 2) {
         for (int d = 0; d < 3; ++d)
@@ -211,6 +214,21 @@ CellMultigrid::CellMultigrid(const FluidGrid& grid, int pre, int post, int coars
     }
     levels_.push_back(std::move(L));
   }
+  // Aggregates across a cut: the one-layer exchanges of the finer level's residuals and
+  // coefficients and of the coarser level's corrections and coefficients (on levels not gathered,
+  // so on the same ranks and communicator).
+  for (std::size_t l = 1; l < levels_.size(); ++l) {
+    if (!levels_[l]->crosses || !levels_[l]->active) continue;
+    for (Level* L : {levels_[l - 1].get(), levels_[l].get()}) {
+      if (L->cross_halo) continue;
+      L->cross_halo = std::make_unique<CellHalo>(L->comm, L->block, 1, CellHalo::Stencil::box);
+      CellHalo::Block faces = L->block;
+      for (int d = 0; d < 3; ++d)
+        if (!L->cross_halo->fills(d, 1)) faces.m[d] += 1;  // the high domain face's coefficients
+      L->cross_coef_halo = std::make_unique<CellHalo>(L->comm, faces, 1, CellHalo::Stencil::box);
+    }
+    levels_[l - 1]->r.assign(levels_[l - 1]->x.size(), 0.0);
+  }
 }
 
 CellMultigrid::~CellMultigrid() {
@@ -222,11 +240,13 @@ CellMultigrid::~CellMultigrid() {
   if (transfer_comm_ != MPI_COMM_NULL) MPI_Comm_free(&transfer_comm_);
 }
 
-void CellMultigrid::exchange(Level& L, std::initializer_list<std::vector<double>*> fields) {
-  if (!L.halo || !L.halo->active()) return;  // one rank, nothing periodic: no ghost has a source
+void CellMultigrid::exchange(Level& L, std::initializer_list<std::vector<double>*> fields) { exchange_on(L.halo, fields); }
+
+void CellMultigrid::exchange_on(const std::unique_ptr<CellHalo>& halo, std::initializer_list<std::vector<double>*> fields) {
+  if (!halo || !halo->active()) return;  // one rank, nothing periodic: no ghost has a source
   const double start = MPI_Wtime();
   ++exchanges_;
-  L.halo->exchange(fields);
+  halo->exchange(fields);
   exchange_seconds_ += MPI_Wtime() - start;
 }
 
@@ -304,9 +324,23 @@ void CellMultigrid::set_coefficients(const std::vector<double>& rho, bool coarse
       return m;
     };
     if (!C.gathered) {
+      // Across a cut the finer level's next cells' coefficients come first; a coarse high face
+      // whose fine face lies past them is the neighbour's low one, which it computes and sends.
+      // (Once a set-up, as set_inverse_diagonal's: timed, not counted among a cycle's exchanges.)
+      auto coefficients = [&](Level& L) {
+        if (!L.cross_coef_halo->active()) return;
+        const double start = MPI_Wtime();
+        L.cross_coef_halo->exchange({&L.coef[0], &L.coef[1], &L.coef[2]});
+        exchange_seconds_ += MPI_Wtime() - start;
+      };
+      if (C.crosses) coefficients(f);
       for (int d = 0; d < 3; ++d)
-        for_owned(C.s, with_high_face(C.m, d),
-                  [&](int I, int J, int K) { C.coef[d][C.at(I, J, K)] = float(face(d, I, J, K)); });
+        for_owned(C.s, with_high_face(C.m, d), [&](int I, int J, int K) {
+          const int idx[3] = {I, J, K};
+          if (idx[d] == C.s[d] + C.m[d] && C.fine_start[d][idx[d]] > f.s[d] + f.m[d]) return;
+          C.coef[d][C.at(I, J, K)] = float(face(d, I, J, K));
+        });
+      if (C.crosses) coefficients(C);
       continue;
     }
     C.staging.clear();
@@ -526,6 +560,27 @@ void CellMultigrid::restrict_residual(Level& L, Level& C) {
     for_owned(C.s, C.m, [&](int I, int J, int K) { C.b[C.at(I, J, K)] = 0; });
     out = C.b.data();
   }
+  if (C.crosses) {
+    // The aggregates across a cut reach the next rank's first cells: every rank's residuals of
+    // its owned cells (the others 0), exchanged, then summed over this rank's aggregates, each
+    // coarse cell's fine cells in the same order as within a block (k, then j, then i).
+    for (int k = L.s[2]; k < L.s[2] + L.m[2]; ++k)
+      for (int j = L.s[1]; j < L.s[1] + L.m[1]; ++j) {
+        const std::size_t c0 = L.at(L.s[0], j, k);
+        for (int i = (L.s[0] + j + k) & 1; i < L.m[0]; i += 2) L.r[c0 + i] = residual(L, c0 + i);
+      }
+    exchange_on(L.cross_halo, {&L.r});
+    std::array<int, 3> lo{}, hi{};
+    for (int d = 0; d < 3; ++d) lo[d] = C.fine_start[d][C.s[d]], hi[d] = C.fine_start[d][C.s[d] + C.m[d]];
+    const int* const agg = C.aggregate_of[0].data();
+    for (int k = lo[2]; k < hi[2]; ++k)
+      for (int j = lo[1]; j < hi[1]; ++j) {
+        double* const coarse_row = out + box.at(box.s[0], C.aggregate_of[1][j], C.aggregate_of[2][k]) - box.s[0];
+        const double* const r = L.r.data() + L.at(lo[0], j, k) - lo[0];
+        for (int i = lo[0] + ((lo[0] + j + k) & 1); i < hi[0]; i += 2) coarse_row[agg[i]] += r[i];
+      }
+    return;
+  }
   const int* const agg = C.aggregate_of[0].data() + L.s[0];
   for (int k = L.s[2]; k < L.s[2] + L.m[2]; ++k)
     for (int j = L.s[1]; j < L.s[1] + L.m[1]; ++j) {
@@ -552,6 +607,8 @@ void CellMultigrid::prolong(Level& C, Level& L) {
     box = {C.part.s, C.part.m};
     in = C.staging.data();
   } else {
+    // Across a cut, the first cells take the correction of the neighbour's aggregate.
+    if (C.crosses) exchange_on(C.cross_halo, {&C.x});
     box = {C.gs, C.gm};
     in = C.x.data();
   }

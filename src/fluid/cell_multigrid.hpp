@@ -21,7 +21,12 @@
 // precision (the smoother streams them: 4 bytes a face instead of 8; theory F9a): rounded once,
 // they are one fixed symmetric operator per level, so the cycle stays a fixed symmetric
 // preconditioner; the operator CG iterates on (apply_operator) keeps the double coefficients. Red-black sweeps give the same numbers on any rank
-// count (the aggregates, and so the preconditioner, follow the ranks' blocks).
+// count (the aggregates, and so the preconditioner, follow the ranks' blocks). With level_pairs
+// (`fluid.poisson.multigrid.pairs: level`) the cells are paired over each whole level that is not
+// gathered, pairs across a cut included (owned by the rank of their first cell: the residuals and
+// coefficients of the neighbour's first cells come in one exchange, the pair's correction goes back
+// in another): the aggregates, and so the V-cycle's numbers, are one rank's wherever no level is
+// gathered.
 //
 // Each level's blocks are each rank's aggregates; their ghosts are filled by fluid/cell_halo.hpp,
 // two layers deep where every split block is at least 2 cells across and every face at most 2,048
@@ -68,8 +73,11 @@ class CellMultigrid {
   // split blocks are at least 2 cells across and whose faces are small (the others keep 1 layer
   // and an exchange per pass); 1 everywhere exchanges before every pass. The same numbers either
   // way.
+  // level_pairs: the cells paired over each whole level where it is not gathered (one rank's
+  // aggregates on any cuts: the V-cycle's numbers those of one rank), else within each rank's block.
   CellMultigrid(const FluidGrid& grid, int pre_sweeps = 2, int post_sweeps = 2, int coarse_sweeps = 20,
-                bool coarse_direct = true, int ghost_layers = 2, const LevelsAsOn& as_on = {});
+                bool coarse_direct = true, int ghost_layers = 2, const LevelsAsOn& as_on = {},
+                bool level_pairs = false);
   ~CellMultigrid();
   CellMultigrid(const CellMultigrid&) = delete;
   CellMultigrid& operator=(const CellMultigrid&) = delete;
@@ -121,6 +129,15 @@ class CellMultigrid {
     // With 2 layers, the face coefficients' exchange: the owned box reaches the high domain faces
     // along the unsplit directions, so the ghost cells get their boundary faces too.
     std::unique_ptr<CellHalo> face_halo;
+    // Aggregates across a cut (multigrid_plan.hpp's crosses; fluid.poisson.multigrid.pairs: level):
+    // on the finer level, the residuals' one-layer exchange (edges and corners too) and its face
+    // coefficients' (the owned box reaching the high domain faces); on the coarser, its
+    // correction's and its coefficients' (an owner's high face is its neighbour's low one). The
+    // residuals of the owned cells of the pre-smoothing's first colour, the other colour 0.
+    bool crosses = false;
+    std::unique_ptr<CellHalo> cross_halo, cross_coef_halo;
+    std::vector<double> r;
+    CellHalo::Block block;  // this rank's block of the level (the halos')
     std::array<int, 3> n{}, s{}, m{}, gs{}, gm{};
     std::array<std::ptrdiff_t, 3> stride{};
     // Along each direction, the first cell of the next finer level's aggregate I, global,
@@ -141,6 +158,9 @@ class CellMultigrid {
     }
   };
   void exchange(Level& L, std::initializer_list<std::vector<double>*> fields);
+  // An exchange on one of a level's halos (exchange(): its smoothing halo), counted among the
+  // cycle's exchanges and timed.
+  void exchange_on(const std::unique_ptr<CellHalo>& halo, std::initializer_list<std::vector<double>*> fields);
   // The smoother's inverse diagonal of the owned cells; with 2 layers first the ghost cells' face
   // coefficients from their owners, and the first ghost layer's too (the same bits as its owner's).
   void set_inverse_diagonal(Level& L);

@@ -10,21 +10,30 @@ namespace {
 constexpr long kCoarsestCells = 256;   // stop coarsening below this many cells in all
 constexpr long kTwoLayersFace = 2048;  // two ghost layers on a level whose faces are at most this
 
+// The aggregates of c cells from cell `first` along a direction that coarsens: pairs; an odd run's
+// last cell alone, or, where it is narrower than the cell before it (what is left of a finer
+// level's single cell), with that pair (a triple), so that no coarser level keeps a sliver.
+int pair_count(int c, int first, const std::vector<int>& span) {
+  const bool triple = c % 2 == 1 && c >= 3 && span[std::size_t(first + c - 1)] < span[std::size_t(first + c - 2)];
+  return triple ? c / 2 : (c + 1) / 2;
+}
+
 }  // namespace
 
 std::vector<MultigridLevelPlan> plan_multigrid(std::array<std::vector<int>, 3> own, const std::array<bool, 3>& periodic,
-                                               int ghost_layers) {
+                                               int ghost_layers, bool level_pairs) {
   std::vector<MultigridLevelPlan> plan;
   std::array<int, 3> n{};
   for (int d = 0; d < 3; ++d) n[d] = std::accumulate(own[d].begin(), own[d].end(), 0);
   std::array<std::vector<int>, 3> fine_start, parts;  // of the level being made
-  std::array<bool, 3> merged{};
+  std::array<bool, 3> merged{}, crosses{};
   while (true) {
     MultigridLevelPlan L;
     L.n = n;
     L.blocks = own;
     L.fine_start = fine_start;
     L.merged = merged;
+    L.crosses = crosses;
     L.parts = parts;
     const auto procs = L.procs();
     for (int d = 0; d < 3; ++d) L.halo = L.halo || procs[d] > 1 || periodic[d];
@@ -60,46 +69,62 @@ std::vector<MultigridLevelPlan> plan_multigrid(std::array<std::vector<int>, 3> o
     plan.push_back(std::move(L));
     if (long(n[0]) * n[1] * n[2] <= kCoarsestCells) break;
     // Pair the cells of each rank's block along every direction that can be coarsened (a block
-    // of odd length ends in a single cell or a triple, below; uniform pairs of an even whole where periodic, for the
-    // red-black colouring). Where a block would fall below 2 cells on several ranks, the coarser
+    // of odd length ends in a single cell or a triple, pair_count; uniform pairs of an even whole where periodic, for the
+    // red-black colouring), or, with level_pairs, the cells of the whole level where the coarser
+    // level is not gathered. Where a block would fall below 2 cells on several ranks, the coarser
     // level is gathered along that direction: ranks 2c and 2c + 1 hand their aggregates to 2c.
     std::array<bool, 3> ok{}, merge{};
     bool any = false;
     for (int d = 0; d < 3; ++d) {
       ok[d] = n[d] >= 4 && (!periodic[d] || n[d] % 2 == 0);
       for (int c : own[d]) ok[d] = ok[d] && (!periodic[d] || c % 2 == 0);
-      // The aggregates of the block of c cells from cell `first`: pairs; an odd block's last cell
-      // alone, or, where it is narrower than the cell before it (what is left of a finer level's
-      // single cell), with that pair (a triple), so that no coarser level keeps a sliver.
-      const auto& span = plan.back().span[d];
-      auto aggregates = [&](int c, int first) {
-        if (!ok[d]) return c;
-        const bool triple = c % 2 == 1 && c >= 3 && span[std::size_t(first + c - 1)] < span[std::size_t(first + c - 2)];
-        return triple ? c / 2 : (c + 1) / 2;
-      };
-      {
-        int first = 0;
-        for (int c : own[d]) {
-          merge[d] = merge[d] || (ok[d] && procs[d] > 1 && aggregates(c, first) < 2);
-          first += c;
-        }
-      }
-      fine_start[d].clear();
       int first = 0;
-      for (auto& c : own[d]) {
-        const int count = aggregates(c, first);
-        for (int I = 0; I < count; ++I) fine_start[d].push_back(first + (ok[d] ? 2 * I : I));
+      for (int c : own[d]) {
+        merge[d] = merge[d] || (ok[d] && procs[d] > 1 && pair_count(c, first, plan.back().span[d]) < 2);
         first += c;
-        c = count;
       }
-      fine_start[d].push_back(first);
-      n[d] = int(fine_start[d].size()) - 1;
       any = any || ok[d];
+    }
+    const bool gather = merge[0] || merge[1] || merge[2];
+    for (int d = 0; d < 3; ++d) {
+      fine_start[d].clear();
+      crosses[d] = false;
+      const auto& span = plan.back().span[d];
+      if (level_pairs && ok[d] && !gather) {
+        // Pairs over the whole level (cells 2I and 2I + 1; an odd whole ends as a block does), each
+        // owned by the rank of its first cell: the aggregates one rank makes, whatever the cuts. A
+        // pair across a cut makes its owner read its second cell's residual and coefficients, and
+        // that cell's rank read the pair's correction, from the neighbour (theory F9a).
+        const int total = n[d], count = pair_count(total, 0, span);
+        for (int I = 0; I < count; ++I) fine_start[d].push_back(2 * I);
+        fine_start[d].push_back(total);
+        int first = 0;
+        for (auto& c : own[d]) {
+          int owned = 0;
+          for (int I = 0; I < count; ++I) {
+            const int f = fine_start[d][std::size_t(I)];
+            owned += f >= first && f < first + c;
+          }
+          // A cut inside a pair (the block starts on its second cell).
+          crosses[d] = crosses[d] || (first > 0 && !std::binary_search(fine_start[d].begin(), fine_start[d].end(), first));
+          first += c;
+          c = owned;
+        }
+      } else {
+        int first = 0;
+        for (auto& c : own[d]) {
+          const int count = ok[d] ? pair_count(c, first, span) : c;
+          for (int I = 0; I < count; ++I) fine_start[d].push_back(first + (ok[d] ? 2 * I : I));
+          first += c;
+          c = count;
+        }
+        fine_start[d].push_back(first);
+      }
+      n[d] = int(fine_start[d].size()) - 1;
     }
     if (!any) break;
     merged = merge;
-    const bool gathered = merge[0] || merge[1] || merge[2];
-    for (int d = 0; d < 3; ++d) parts[d] = gathered ? own[d] : std::vector<int>{};
+    for (int d = 0; d < 3; ++d) parts[d] = gather ? own[d] : std::vector<int>{};
     for (int d = 0; d < 3; ++d)
       if (merge[d]) {
         std::vector<int> pairs;
@@ -148,6 +173,9 @@ std::vector<int> multigrid_exchanges(const std::vector<MultigridLevelPlan>& plan
     else
       count[l] = smoothing_exchanges(pre, L.layers, true, true) + smoothing_exchanges(post, L.layers, false, false);
     if (l == 0) count[l] += 1;  // the operator's (apply_operator), once a Krylov iteration
+    // Aggregates across a cut: the finer level's residuals before the restriction, and this
+    // level's correction before the prolongation.
+    if (l > 0 && (L.crosses[0] || L.crosses[1] || L.crosses[2])) count[l - 1] += 1, count[l] += 1;
   }
   return count;
 }

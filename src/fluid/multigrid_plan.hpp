@@ -24,6 +24,10 @@ struct MultigridLevelPlan {
   // before the pairs merge (empty where nothing is gathered).
   std::array<bool, 3> merged{};
   std::array<std::vector<int>, 3> parts;
+  // Along d, an aggregate lies across a cut of the next finer level's blocks (level_pairs): it
+  // belongs to the rank of its first cell, and its second cell is the next rank's first.
+  std::array<bool, 3> crosses{};
+  bool crossing() const { return crosses[0] || crosses[1] || crosses[2]; }
   bool halo = false;  // some ghost has a source: a neighbour rank or a periodic image
   int layers = 1;     // ghost layers: 2 lets a red-black sweep follow one exchange
   bool gathered() const { return merged[0] || merged[1] || merged[2]; }
@@ -33,9 +37,10 @@ struct MultigridLevelPlan {
 
 // The levels from the finest level's blocks (PETSc's ownership ranges) down to the coarsest.
 // ghost_layers: 2 where a level allows it (every split block at least 2 cells across, every face
-// at most kTwoLayersFace cells), else 1.
+// at most kTwoLayersFace cells), else 1. level_pairs: the cells paired over the whole level where
+// the coarser level is not gathered (one rank's aggregates on any cuts), else within each block.
 std::vector<MultigridLevelPlan> plan_multigrid(std::array<std::vector<int>, 3> blocks, const std::array<bool, 3>& periodic,
-                                               int ghost_layers);
+                                               int ghost_layers, bool level_pairs = false);
 
 // The coarse face coefficient along d on the low side of coarse cell I (I = 0..coarse.n[d]) is the
 // sum of the fine coefficients across it over this: the distance between the two coarse centres
@@ -50,7 +55,9 @@ int smoothing_exchanges(int sweeps, int layers, bool from_zero, bool ghosts_afte
 
 // Ghost exchanges one V-cycle makes on each level, the operator's one (a Krylov iteration) counted
 // on the finest: pre- and post-smoothing on every level but the coarsest, which is solved exactly
-// (coarse_direct) or smoothed by coarse_sweeps. A level without a halo exchanges nothing.
+// (coarse_direct) or smoothed by coarse_sweeps; where a level's aggregates cross the finer level's
+// cuts, one more on each: the finer level's residuals, this level's correction. A level without a
+// halo exchanges nothing.
 std::vector<int> multigrid_exchanges(const std::vector<MultigridLevelPlan>& plan, int pre, int post, int coarse_sweeps,
                                      bool coarse_direct);
 

@@ -24,7 +24,7 @@ PressurePoisson::PressurePoisson(const FluidGrid& grid, const PoissonSettings& s
     // Matrix-free: the multigrid's finest level applies the operator from its face coefficients.
     multigrid_ =
         std::make_unique<CellMultigrid>(grid, settings_.pre_sweeps, settings_.post_sweeps, settings_.coarse_sweeps,
-                                        settings_.coarse_direct, 2, settings_.levels_as_on);
+                                        settings_.coarse_direct, 2, settings_.levels_as_on, settings_.level_pairs);
     PetscInt local, global;
     Vec probe;
     check(DMCreateGlobalVector(dm, &probe), "DMCreateGlobalVector");

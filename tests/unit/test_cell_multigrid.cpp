@@ -106,10 +106,10 @@ TEST(CellMultigrid, OddSizesCoarsenAndTheVCycleIsSymmetricPositive) {
 std::vector<double> vcycle_of_source(std::array<int, 3> n, MPI_Comm comm, BoundaryKind x_sides,
                                      std::array<int, 3> procs = {0, 0, 0}, int* levels = nullptr,
                                      int* gathered = nullptr, int ghost_layers = 2, long* messages = nullptr,
-                                     const LevelsAsOn& as_on = {}) {
+                                     const LevelsAsOn& as_on = {}, bool level_pairs = false) {
   Problem P(n, comm, x_sides, procs);
   const FluidGrid& g = P.grid;
-  CellMultigrid mg(g, 2, 2, 20, true, ghost_layers, as_on);
+  CellMultigrid mg(g, 2, 2, 20, true, ghost_layers, as_on, level_pairs);
   if (levels) *levels = mg.levels();
   if (gathered) *gathered = mg.gathered_levels();
   mg.set_coefficients(P.rho);
@@ -243,11 +243,12 @@ PoissonStats solve_source(const Problem& P, const PoissonSettings& st, std::vect
 
 // CG's iterations to 1e-10 on `comm` (the heavy drop and pool of Problem).
 int iterations_on(std::array<int, 3> n, MPI_Comm comm, BoundaryKind x_sides, std::array<int, 3> procs,
-                  const LevelsAsOn& as_on = {}) {
+                  const LevelsAsOn& as_on = {}, bool level_pairs = false) {
   const Problem P(n, comm, x_sides, procs);
   PoissonSettings st;
   st.rtol = 1e-10;
   st.levels_as_on = as_on;
+  st.level_pairs = level_pairs;
   std::vector<double> b, p;
   return solve_source(P, st, b, p).iterations;
 }
@@ -314,6 +315,78 @@ TEST(CellMultigrid, LevelsLaidOutAsOnAnotherGridTakeItsIterations) {
     }
 }
 
+// Pairs over the whole level (`fluid.poisson.multigrid.pairs: level`): a pair across a cut belongs
+// to the rank of its first cell, which takes the second's residual and coefficients from the
+// neighbour, and the neighbour takes the pair's correction. The levels are one rank's where none is
+// gathered, so the V-cycle is one rank's to the bit; where some are (blocks of a few cells), it is
+// the one-process lay-out's of those cuts (levels_as_on), and CG's iterations are its. Cuts on odd
+// cells along x, along y, and along both on 4 ranks (pairs across two cuts: a corner's), walls and
+// x periodic; the blocks' own pairs give other numbers there (else the test would show nothing).
+TEST(CellMultigrid, LevelPairsGiveOneRanksVCycleOnAnyCuts) {
+  int rank, size;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  if (size == 1) return;
+  struct Split {
+    std::array<int, 3> n, procs;
+  };
+  std::vector<Split> splits{{{45, 45, 33}, {size, 1, 1}}, {{24, 46, 40}, {1, size, 1}}};
+  if (size == 4) splits.push_back({{46, 46, 20}, {2, 2, 1}});
+  for (const Split& split : splits)
+    for (const BoundaryKind x_sides : {BoundaryKind::no_slip, BoundaryKind::periodic}) {
+      if (x_sides == BoundaryKind::periodic && split.n[0] % 2) continue;
+      LevelsAsOn as_on;
+      as_on.grid = split.procs;
+      const double box[3] = {kL, kL, 0.75 * kL};
+      for (int d = 0; d < 3; ++d)
+        for (int c = 1; c < split.procs[d]; ++c) as_on.cuts[d].push_back(box[d] * c / split.procs[d]);
+      int levels = 0, gathered = 0;
+      const std::vector<double> pairs = vcycle_of_source(split.n, MPI_COMM_WORLD, x_sides, split.procs, &levels,
+                                                         &gathered, 2, nullptr, {}, true);
+      const std::vector<double> blocks = vcycle_of_source(split.n, MPI_COMM_WORLD, x_sides, split.procs);
+      const int ranks_iterations = iterations_on(split.n, MPI_COMM_WORLD, x_sides, split.procs, {}, true);
+      if (rank != 0) continue;
+      const std::vector<double> as = vcycle_of_source(split.n, MPI_COMM_SELF, x_sides, {1, 1, 1}, nullptr, nullptr, 2,
+                                                      nullptr, as_on, true);
+      const std::vector<double> one = vcycle_of_source(split.n, MPI_COMM_SELF, x_sides, {1, 1, 1});
+      const int as_iterations = iterations_on(split.n, MPI_COMM_SELF, x_sides, {1, 1, 1}, as_on, true);
+      const int one_iterations = iterations_on(split.n, MPI_COMM_SELF, x_sides, {1, 1, 1});
+      std::size_t differ = 0, first = 0, one_differ = 0, blocks_differ = 0;
+      for (std::size_t c = 0; c < pairs.size(); ++c) {
+        if (pairs[c] != as[c] && differ++ == 0) first = c;
+        one_differ += pairs[c] != one[c] ? 1 : 0;
+        blocks_differ += pairs[c] != blocks[c] ? 1 : 0;
+      }
+      const std::string what = std::to_string(split.n[0]) + " x " + std::to_string(split.n[1]) + " x " +
+                               std::to_string(split.n[2]) + " on " + std::to_string(size) + " ranks, x " +
+                               boundary_name(x_sides);
+      std::printf("%s: %d levels (%d gathered), CG iterations %d with level pairs, %d laid out on one process, %d one "
+                  "rank's\n", what.c_str(), levels, gathered, ranks_iterations, as_iterations, one_iterations);
+      EXPECT_EQ(differ, 0u) << what << ": first at cell " << first << ", " << pairs[first] << " against " << as[first];
+      EXPECT_EQ(as_iterations, ranks_iterations) << what;
+      if (gathered == 0) {
+        EXPECT_EQ(one_differ, 0u) << what << ": no level gathered, the V-cycle should be one rank's";
+        EXPECT_EQ(one_iterations, ranks_iterations) << what;
+      }
+      EXPECT_GT(blocks_differ, 0u) << what << ": the blocks' own pairs give the same numbers; the test shows nothing";
+    }
+  // With one ghost layer on every level (an exchange before each pass): the same numbers.
+  const Split& split = splits.back();
+  const std::vector<double> pairs = vcycle_of_source(split.n, MPI_COMM_WORLD, BoundaryKind::no_slip, split.procs,
+                                                     nullptr, nullptr, 1, nullptr, {}, true);
+  if (rank != 0) return;
+  LevelsAsOn as_on;
+  as_on.grid = split.procs;
+  const double box[3] = {kL, kL, 0.75 * kL};
+  for (int d = 0; d < 3; ++d)
+    for (int c = 1; c < split.procs[d]; ++c) as_on.cuts[d].push_back(box[d] * c / split.procs[d]);
+  const std::vector<double> as = vcycle_of_source(split.n, MPI_COMM_SELF, BoundaryKind::no_slip, {1, 1, 1}, nullptr,
+                                                  nullptr, 1, nullptr, as_on, true);
+  std::size_t differ = 0;
+  for (std::size_t c = 0; c < pairs.size(); ++c) differ += pairs[c] != as[c] ? 1 : 0;
+  EXPECT_EQ(differ, 0u) << "one ghost layer";
+}
+
 // The plan (fluid/multigrid_plan.hpp) lays out the levels of P ranks from the finest level's cuts
 // alone, for the scaling model: its levels, gathered levels, two-layer levels and coarsest size are
 // the multigrid's own, and its count of a V-cycle's exchanges (plus the operator's one) is what rank
@@ -327,18 +400,21 @@ TEST(CellMultigrid, ThePlanLaysOutItsLevelsAndCountsTheExchangesACycleMakes) {
     std::array<int, 3> n, procs;
     BoundaryKind x_sides;
     int ghost_layers;
+    bool level_pairs = false;
   };
   std::vector<Case> cases{{{45, 45, 33}, {0, 0, 0}, BoundaryKind::no_slip, 2},
                           {{45, 45, 33}, {0, 0, 0}, BoundaryKind::no_slip, 1},
                           {{32, 30, 30}, {0, 0, 0}, BoundaryKind::periodic, 2},
                           {{16, 48, 48}, {size, 1, 1}, BoundaryKind::no_slip, 2},
                           {{16, 48, 48}, {size, 1, 1}, BoundaryKind::periodic, 2},
-                          {{64, 64, 40}, {1, size, 1}, BoundaryKind::no_slip, 2}};
+                          {{64, 64, 40}, {1, size, 1}, BoundaryKind::no_slip, 2},
+                          {{45, 45, 33}, {size, 1, 1}, BoundaryKind::no_slip, 2, true},
+                          {{45, 45, 33}, {0, 0, 0}, BoundaryKind::no_slip, 1, true}};
   if (size == 4) cases.push_back({{8, 8, 96}, {2, 2, 1}, BoundaryKind::no_slip, 2});
   for (const Case& cs : cases) {
     Problem P(cs.n, MPI_COMM_WORLD, cs.x_sides, cs.procs);
     const FluidGrid& g = P.grid;
-    CellMultigrid mg(g, 2, 2, 20, true, cs.ghost_layers);
+    CellMultigrid mg(g, 2, 2, 20, true, cs.ghost_layers, {}, cs.level_pairs);
     mg.set_coefficients(P.rho);
     DM dm = g.pressure_dm();
     PetscInt pm, pn, pp;
@@ -348,7 +424,7 @@ TEST(CellMultigrid, ThePlanLaysOutItsLevelsAndCountsTheExchangesACycleMakes) {
     const PetscInt procs[3] = {pm, pn, pp};
     std::array<std::vector<int>, 3> blocks;
     for (int d = 0; d < 3; ++d) blocks[d].assign(own[d], own[d] + procs[d]);
-    const auto plan = plan_multigrid(blocks, {g.periodic(0), g.periodic(1), g.periodic(2)}, cs.ghost_layers);
+    const auto plan = plan_multigrid(blocks, {g.periodic(0), g.periodic(1), g.periodic(2)}, cs.ghost_layers, cs.level_pairs);
     const auto exchanges = multigrid_exchanges(plan, 2, 2, 20, true);
     Vec x, y;
     DMCreateGlobalVector(dm, &x);
@@ -360,7 +436,8 @@ TEST(CellMultigrid, ThePlanLaysOutItsLevelsAndCountsTheExchangesACycleMakes) {
     VecDestroy(&y);
     const std::string name = std::to_string(cs.n[0]) + " x " + std::to_string(cs.n[1]) + " x " + std::to_string(cs.n[2]) +
                              " on " + std::to_string(pm) + " x " + std::to_string(pn) + " x " + std::to_string(pp) +
-                             ", x " + boundary_name(cs.x_sides) + ", " + std::to_string(cs.ghost_layers) + " layers";
+                             ", x " + boundary_name(cs.x_sides) + ", " + std::to_string(cs.ghost_layers) + " layers" +
+                             (cs.level_pairs ? ", level pairs" : "");
     EXPECT_EQ(int(plan.size()), mg.levels()) << name;
     EXPECT_EQ(plan.back().cells(), mg.coarsest_cells()) << name;
     EXPECT_EQ(int(std::count_if(plan.begin(), plan.end(), [](const auto& L) { return L.gathered(); })), mg.gathered_levels())
