@@ -175,7 +175,7 @@ std::vector<int> multigrid_exchanges(const std::vector<MultigridLevelPlan>& plan
     if (l == 0) count[l] += 1;  // the operator's (apply_operator), once a Krylov iteration
     // Aggregates across a cut: the finer level's residuals before the restriction, and this
     // level's correction before the prolongation.
-    if (l > 0 && (L.crosses[0] || L.crosses[1] || L.crosses[2])) count[l - 1] += 1, count[l] += 1;
+    if (l > 0 && L.crossing()) count[l - 1] += 1, count[l] += 1;
   }
   return count;
 }
