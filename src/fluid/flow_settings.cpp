@@ -71,7 +71,7 @@ PoissonSettings FlowSettings::poisson_from_config(const ConfigNode& fluid) {
       s.post_sweeps = int(mg->integer("post_sweeps", 1, 20, s.post_sweeps));
       s.coarse_sweeps = int(mg->integer("coarse_sweeps", 2, 1000, s.coarse_sweeps));
       s.coarse_direct = mg->choice("coarse_solver", {"direct", "sweeps"}, "direct") == "direct";
-      s.level_pairs = mg->choice("pairs", {"blocks", "level"}, "blocks") == "level";
+      s.level_pairs = mg->choice("pairs", {"level", "blocks"}, "level") == "level";
       if (s.pre_sweeps != s.post_sweeps)
         mg->fail("post_sweeps", "equal to pre_sweeps (CG needs a symmetric preconditioner)");
       if (const auto as = mg->optional_section("levels_as_on")) {

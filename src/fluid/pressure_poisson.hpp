@@ -38,10 +38,10 @@ struct PoissonSettings {
   // `multigrid.levels_as_on` (issue 19): on one process, the levels another process grid would make
   // (cell_multigrid.hpp), so that one process counts that rank count's iterations.
   LevelsAsOn levels_as_on;
-  // `multigrid.pairs`: "blocks" (each rank's block paired on its own) or "level" (the whole level
+  // `multigrid.pairs`: "level" (default) or "blocks" (each rank's block paired on its own). "level": the whole level
   // paired, pairs across a cut included, where it is not gathered: one rank's aggregates, and so its
   // V-cycle's numbers, on any cuts; cell_multigrid.hpp, theory F9a).
-  bool level_pairs = false;
+  bool level_pairs = true;
   // CG's two inner products an iteration merged into one reduction (Chronopoulos & Gear; PETSc's
   // KSPCGUseSingleReduction): 2 reductions an iteration with the residual's norm, instead of 3.
   // Off by default: 5 % slower on 2 ranks, and the reductions are not where many ranks wait (F9).
